@@ -1,0 +1,70 @@
+// The binary BVH that every builder produces, and the options that choose a builder.
+//
+// Builders are points in the generic framework of Popov et al. 2009 ("The Generic Algorithm"): a set
+// of search spaces plus the cost model (with its overlap penalty). Each named builder is a preset.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "spacebvh/cost_model.hpp"
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/scene.hpp"
+
+namespace spacebvh {
+
+struct BvhNode {
+    AABB bounds;
+    // Inner node (reference_count == 0): children are nodes[first] and nodes[first + 1].
+    // Leaf (reference_count > 0): triangles are primitives[first .. first + reference_count).
+    uint32_t first = 0;
+    uint32_t reference_count = 0;
+
+    bool is_leaf() const { return reference_count > 0; }
+};
+
+struct Bvh {
+    std::vector<BvhNode> nodes;       // nodes[0] is the root; depth-first order, left child first
+    std::vector<uint32_t> primitives;  // triangle ids of the leaves, leaf by leaf
+    std::string builder;               // the preset that built it
+    CostModel cost;                    // the cost model it was built with
+
+    const BvhNode& root() const { return nodes.front(); }
+    bool empty() const { return nodes.empty(); }
+};
+
+// The search spaces a node's split is chosen from (any union).
+enum class SearchSpace : uint32_t {
+    object_sweep = 1u << 0,   // exact SAH sweep over centroid-sorted references, all axes (CBVH)
+    object_binned = 1u << 1,  // binned object SAH (Wald 2007)
+};
+constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
+
+struct BuildOptions {
+    std::string builder = "binned";  // a name from builder_names()
+    CostModel cost;
+    uint32_t max_leaf_size = 8;  // a node with more references is always split
+    uint32_t max_depth = 64;     // nodes at this depth become leaves whatever their size
+    uint32_t object_bins = 32;   // bins per axis of the binned object search space
+    // Called now and then with the fraction of references that have reached a leaf (0..1), from any
+    // thread. May be empty.
+    std::function<void(double)> progress;
+
+    // Throws Error for an unknown builder or absurd parameters.
+    void validate() const;
+};
+
+// Named builders: "cbvh" (exact object sweep), "binned" (binned object SAH).
+std::vector<std::string> builder_names();
+// One line each, for --help.
+std::string describe_builder(const std::string& name);
+
+// Builds a BVH over the scene's triangles with the calling thread's oneTBB arena (limit threads with
+// tbb::global_control or a tbb::task_arena). Deterministic: the same scene and options give the same
+// tree, whatever the thread count. An empty scene throws Error.
+Bvh build_bvh(const Scene& scene, const BuildOptions& options);
+
+}  // namespace spacebvh

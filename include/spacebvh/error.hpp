@@ -1,0 +1,15 @@
+// The one exception type of the library: every bad input (file, parameter, scene) is reported as an
+// Error whose message says what is wrong and where (file and line or element).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace spacebvh {
+
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+}  // namespace spacebvh

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs what spacebvh needs to build and test on Debian 12, from Debian packages only.
+# Safe to run again: apt-get skips what is already installed.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libtbb-dev            # oneTBB: parallel build and tracing
+  libembree-dev         # Embree 3: the yardstick in `spacebvh compare` and the test oracle
+  libtinyobjloader-dev  # OBJ scenes
+  libtinygltf-dev       # glTF 2.0 scenes (.gltf/.glb)
+  libstb-dev            # PNG output (stb_image_write)
+  libcli11-dev          # command line
+  nlohmann-json3-dev    # --json output
+  libgtest-dev          # tests
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

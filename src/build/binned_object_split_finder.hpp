@@ -1,0 +1,19 @@
+// Binned object SAH (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"):
+// centroids are binned into B equal bins per axis and only the B-1 cuts between bins are evaluated.
+#pragma once
+
+#include "build/split.hpp"
+
+namespace spacebvh::build {
+
+class BinnedObjectSplitFinder final : public SplitFinder {
+public:
+    explicit BinnedObjectSplitFinder(uint32_t bins) : bins_(bins) {}
+    const char* name() const override { return "object-binned"; }
+    Split find(std::span<Reference> references, const ReferenceSummary& node, const CostModel& cost) const override;
+
+private:
+    uint32_t bins_;
+};
+
+}  // namespace spacebvh::build

@@ -1,0 +1,62 @@
+// A split configuration chosen from a search space, and the interface every search space implements.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "build/reference.hpp"
+#include "spacebvh/cost_model.hpp"
+
+namespace spacebvh::build {
+
+enum class SplitKind : uint8_t {
+    none,
+    // References whose (centroid[axis], primitive) is lexicographically below
+    // (position, tie_primitive) go left: a cut in the centroid-sorted order (object sweep, and the
+    // median fallback).
+    object_sorted,
+    // References whose centroid falls in a bin below `bin` go left (binned object SAH). The bin
+    // function is ObjectBinning's, so the partition reproduces the finder's counts exactly.
+    object_binned,
+};
+
+struct ObjectBinning {
+    int axis = 0;
+    float origin = 0;  // centroid_bounds.lo[axis]
+    float scale = 0;   // bins / extent
+    uint32_t bins = 1;
+
+    uint32_t bin_of(float centroid) const {
+        const float position = (centroid - origin) * scale;
+        // Clamp in float first: a NaN-free value in [0, bins - 1] converts safely.
+        const float clamped = std::min(std::max(position, 0.0f), float(bins - 1));
+        return uint32_t(clamped);
+    }
+};
+
+struct Split {
+    SplitKind kind = SplitKind::none;
+    float cost = kInfinity;
+    int axis = 0;
+    float position = 0;                   // object_sorted
+    uint32_t tie_primitive = 0;           // object_sorted
+    ObjectBinning binning;                // object_binned
+    uint32_t bin = 0;                     // object_binned: first bin of the right child
+    AABB left_bounds, right_bounds;       // boxes of the children this split makes
+    uint32_t left_count = 0, right_count = 0;
+
+    bool is_valid() const { return kind != SplitKind::none && cost < kInfinity; }
+};
+
+// A search space: finds the lowest-cost configuration of its kind for a node. Finders may reorder
+// the node's references (e.g. sort them) but must not change them. They must be deterministic:
+// the same references in the same order give the same split, whatever the thread count.
+class SplitFinder {
+public:
+    virtual ~SplitFinder() = default;
+    virtual const char* name() const = 0;
+    virtual Split find(std::span<Reference> references, const ReferenceSummary& node,
+                       const CostModel& cost) const = 0;
+};
+
+}  // namespace spacebvh::build

@@ -1,0 +1,39 @@
+// The generic top-down driver (Popov et al. 2009, "The Generic Algorithm"): at each node, evaluate
+// every configured search space, take the configuration of lowest cost under the cost model, and make
+// a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "build/reference.hpp"
+#include "build/split.hpp"
+#include "spacebvh/bvh.hpp"
+
+namespace spacebvh::build {
+
+struct BuildLimits {
+    uint32_t max_leaf_size = 8;
+    uint32_t max_depth = 64;
+};
+
+class TopDownBuilder {
+public:
+    TopDownBuilder(CostModel cost, BuildLimits limits, std::vector<std::unique_ptr<SplitFinder>> search_spaces,
+                   std::function<void(double)> progress = {});
+    ~TopDownBuilder();
+
+    // Builds over the references (consumed). Parallel over subtrees with oneTBB; the tree depends
+    // only on the input, never on scheduling (see the slot numbering in the .cpp).
+    Bvh build(std::vector<Reference> references);
+
+private:
+    struct Impl;
+    CostModel cost_;
+    BuildLimits limits_;
+    std::vector<std::unique_ptr<SplitFinder>> search_spaces_;
+    std::function<void(double)> progress_;
+};
+
+}  // namespace spacebvh::build

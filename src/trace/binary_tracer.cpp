@@ -1,0 +1,275 @@
+#include <immintrin.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cstring>
+
+#include "spacebvh/tracer.hpp"
+#include "trace/watertight_triangle.hpp"
+
+namespace spacebvh {
+
+// One inner node holds the boxes of both children in the order the SSE slab test reads them:
+// per axis [lo of child 0, lo of child 1, hi of child 0, hi of child 1].
+struct alignas(64) CompactNode {
+    float planes[3][4];
+    // Inner child: index of its CompactNode, count = 0. Leaf child: first LeafTriangle, count > 0.
+    uint32_t child[2];
+    uint32_t count[2];
+};
+static_assert(sizeof(CompactNode) == 64);
+
+struct LeafTriangle {
+    Vec3 v0, v1, v2;
+    uint32_t primitive;
+};
+
+struct BinaryTracer::Layout {
+    std::vector<CompactNode> nodes;
+    std::vector<LeafTriangle> triangles;
+};
+
+namespace {
+
+constexpr int kStackSize = 128;
+// Conservative box test (Ize 2013; pbrt-v4 gamma(3)): widen the far distance by the worst rounding of
+// the slab computation so rounding never culls a box the ray really touches.
+constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
+
+void set_child(CompactNode& node, int slot, const AABB& box, uint32_t child, uint32_t count) {
+    for (int axis = 0; axis < 3; ++axis) {
+        node.planes[axis][slot] = box.lo[axis];
+        node.planes[axis][slot + 2] = box.hi[axis];
+    }
+    node.child[slot] = child;
+    node.count[slot] = count;
+}
+
+// Per-ray constants of the two-box slab test.
+struct SlabRay {
+    __m128 org[3], inv_dir[3];
+    bool negative[3];
+    explicit SlabRay(const Ray& ray) {
+        for (int axis = 0; axis < 3; ++axis) {
+            const float inv = 1.0f / ray.dir[axis];  // +-inf for axis-parallel rays
+            org[axis] = _mm_set1_ps(ray.org[axis]);
+            inv_dir[axis] = _mm_set1_ps(inv);
+            negative[axis] = std::signbit(inv);
+        }
+    }
+};
+
+// Returns a 2-bit mask of the children whose boxes the ray enters within [tmin, tmax]; their entry
+// distances go to `entry`. NaN (0 * inf: the ray lies in a slab plane) is ignored by the min/max
+// operand order, which treats the ray as inside that slab: boxes are closed.
+inline int intersect_children(const CompactNode& node, const SlabRay& slab, float tmin, float tmax, float entry[2]) {
+    __m128 near = _mm_set1_ps(tmin);
+    __m128 far = _mm_set1_ps(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        __m128 t = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.planes[axis]), slab.org[axis]), slab.inv_dir[axis]);
+        // Lanes 0,1 must hold the entry planes, lanes 2,3 the exit planes.
+        if (slab.negative[axis]) t = _mm_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2));
+        near = _mm_max_ps(t, near);
+        far = _mm_min_ps(t, far);
+    }
+    const __m128 far_low = _mm_movehl_ps(far, far);  // exit distances into lanes 0,1
+    const __m128 widened = _mm_mul_ps(far_low, _mm_set1_ps(kFarScale));
+    const int mask = _mm_movemask_ps(_mm_cmple_ps(near, _mm_min_ps(widened, _mm_set1_ps(tmax)))) & 3;
+    _mm_storel_pi(reinterpret_cast<__m64*>(entry), near);
+    return mask;
+}
+
+template <bool kAnyHit, bool kStats>
+bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+    const SlabRay slab(ray);
+    const trace::WatertightRay shear(ray);
+    float tmax = ray.tmax;
+    bool found = false;
+
+    struct Entry {
+        uint32_t child, count;
+    };
+    Entry stack[kStackSize];
+    int top = 0;
+    uint32_t node_index = 0;
+
+    auto test_leaf = [&](uint32_t first, uint32_t count) {
+        for (uint32_t i = first; i < first + count; ++i) {
+            const LeafTriangle& tri = layout.triangles[i];
+            if constexpr (kStats) stats->triangles_tested++;
+            trace::TriangleHit candidate;
+            if (trace::intersect_watertight(ray, shear, tri.v0, tri.v1, tri.v2, tmax, candidate)) {
+                found = true;
+                if constexpr (kAnyHit) return true;
+                tmax = candidate.t;
+                hit.t = candidate.t;
+                hit.u = candidate.u;
+                hit.v = candidate.v;
+                hit.primitive = tri.primitive;
+            }
+        }
+        return false;
+    };
+
+    while (true) {
+        const CompactNode& node = layout.nodes[node_index];
+        if constexpr (kStats) stats->nodes_visited += 2;
+        float entry[2];
+        const int mask = intersect_children(node, slab, ray.tmin, tmax, entry);
+
+        // Leaves are tested at once; inner children are queued, nearer first.
+        Entry inner[2];
+        float inner_entry[2];
+        int inner_count = 0;
+        for (int slot = 0; slot < 2; ++slot) {
+            if (!(mask & (1 << slot))) continue;
+            if (node.count[slot] > 0) {
+                if (test_leaf(node.child[slot], node.count[slot])) return true;
+            } else {
+                inner[inner_count] = {node.child[slot], 0};
+                inner_entry[inner_count++] = entry[slot];
+            }
+        }
+        if (inner_count == 2) {
+            const int near = inner_entry[1] < inner_entry[0] ? 1 : 0;
+            stack[top++] = inner[1 - near];
+            node_index = inner[near].child;
+            continue;
+        }
+        if (inner_count == 1) {
+            node_index = inner[0].child;
+            continue;
+        }
+        if (top == 0) break;
+        node_index = stack[--top].child;
+    }
+    return found;
+}
+
+}  // namespace
+
+BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::make_unique<Layout>()) {
+    Layout& layout = *layout_;
+    if (bvh.empty()) {
+        // Nothing to hit: one node whose two children are empty boxes.
+        layout.nodes.resize(1);
+        set_child(layout.nodes[0], 0, AABB::empty(), 0, 0);
+        set_child(layout.nodes[0], 1, AABB::empty(), 0, 0);
+        return;
+    }
+    // Leaf triangles in leaf order; degenerate triangles are dropped (they are never hit).
+    auto add_leaf = [&](const BvhNode& leaf) {
+        const uint32_t first = uint32_t(layout.triangles.size());
+        for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
+            const uint32_t primitive = bvh.primitives[i];
+            const Triangle& triangle = scene.triangles.at(primitive);
+            if (triangle.is_degenerate()) continue;
+            layout.triangles.push_back({triangle.v0, triangle.v1, triangle.v2, primitive});
+        }
+        return std::pair{first, uint32_t(layout.triangles.size()) - first};
+    };
+    auto set_from = [&](CompactNode& node, int slot, uint32_t bvh_index, std::vector<uint32_t>& pending) {
+        const BvhNode& child = bvh.nodes[bvh_index];
+        if (child.is_leaf()) {
+            auto [first, count] = add_leaf(child);
+            // A leaf of degenerate triangles only can never be hit: give it an empty box.
+            set_child(node, slot, count ? child.bounds : AABB::empty(), first, count);
+        } else {
+            set_child(node, slot, child.bounds, 0, 0);
+            pending.push_back(bvh_index);
+        }
+    };
+
+    // Compact node i is made from the inner BVH node inner_order[i]; a child that is an inner node
+    // is patched with its compact index once it is reached.
+    std::vector<uint32_t> inner_order;
+    std::vector<uint32_t> compact_of(bvh.nodes.size(), kInvalidIndex);
+    if (bvh.root().is_leaf()) {
+        layout.nodes.resize(1);
+        std::vector<uint32_t> unused;
+        set_from(layout.nodes[0], 0, 0, unused);
+        set_child(layout.nodes[0], 1, AABB::empty(), 0, 0);
+        return;
+    }
+    inner_order.push_back(0);
+    compact_of[0] = 0;
+    layout.nodes.reserve(bvh.nodes.size() / 2 + 1);
+    for (size_t i = 0; i < inner_order.size(); ++i) {
+        const BvhNode& inner = bvh.nodes[inner_order[i]];
+        layout.nodes.emplace_back();
+        std::vector<uint32_t> pending;
+        set_from(layout.nodes[i], 0, inner.first, pending);
+        set_from(layout.nodes[i], 1, inner.first + 1, pending);
+        for (uint32_t p : pending) {
+            compact_of[p] = uint32_t(inner_order.size());
+            inner_order.push_back(p);
+        }
+        for (int slot = 0; slot < 2; ++slot)
+            if (layout.nodes[i].count[slot] == 0 && !bvh.nodes[inner.first + slot].is_leaf())
+                layout.nodes[i].child[slot] = compact_of[inner.first + slot];
+    }
+}
+
+BinaryTracer::~BinaryTracer() = default;
+BinaryTracer::BinaryTracer(BinaryTracer&&) noexcept = default;
+BinaryTracer& BinaryTracer::operator=(BinaryTracer&&) noexcept = default;
+
+Hit BinaryTracer::intersect(const Ray& ray) const {
+    Hit hit;
+    traverse<false, false>(*layout_, ray, hit, nullptr);
+    return hit;
+}
+
+Hit BinaryTracer::intersect(const Ray& ray, TraversalStats& stats) const {
+    Hit hit;
+    traverse<false, true>(*layout_, ray, hit, &stats);
+    return hit;
+}
+
+bool BinaryTracer::occluded(const Ray& ray) const {
+    Hit unused;
+    return traverse<true, false>(*layout_, ray, unused, nullptr);
+}
+
+bool BinaryTracer::occluded(const Ray& ray, TraversalStats& stats) const {
+    Hit unused;
+    return traverse<true, true>(*layout_, ray, unused, &stats);
+}
+
+namespace {
+// Runs `trace(i, stats)` for every ray across the arena; stats are summed exactly (integers).
+template <typename Trace>
+void for_each_ray(size_t count, TraversalStats* stats, Trace&& trace) {
+    std::atomic<uint64_t> nodes{0}, triangles{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const tbb::blocked_range<size_t>& range) {
+        TraversalStats local;
+        for (size_t i = range.begin(); i != range.end(); ++i) trace(i, local);
+        if (stats) {
+            nodes += local.nodes_visited;
+            triangles += local.triangles_tested;
+        }
+    });
+    if (stats) *stats = {nodes.load(), triangles.load()};
+}
+}  // namespace
+
+void BinaryTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const {
+    if (stats)
+        for_each_ray(rays.size(), stats, [&](size_t i, TraversalStats& s) { hits[i] = intersect(rays[i], s); });
+    else
+        for_each_ray(rays.size(), nullptr, [&](size_t i, TraversalStats&) { hits[i] = intersect(rays[i]); });
+}
+
+void BinaryTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> result, TraversalStats* stats) const {
+    if (stats)
+        for_each_ray(rays.size(), stats, [&](size_t i, TraversalStats& s) { result[i] = occluded(rays[i], s); });
+    else
+        for_each_ray(rays.size(), nullptr, [&](size_t i, TraversalStats&) { result[i] = occluded(rays[i]); });
+}
+
+size_t BinaryTracer::memory_bytes() const {
+    return layout_->nodes.size() * sizeof(CompactNode) + layout_->triangles.size() * sizeof(LeafTriangle);
+}
+
+}  // namespace spacebvh
