@@ -48,7 +48,7 @@ struct BuildOptions {
     CostModel cost;
     uint32_t max_leaf_size = 8;  // a node with more references is always split
     uint32_t max_depth = 64;     // nodes at this depth become leaves whatever their size
-    uint32_t object_bins = 32;   // bins per axis of the binned object search space
+    uint32_t object_bins = 32;   // bins per axis of the binned object search space (2..256)
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;

@@ -38,4 +38,23 @@ struct CostModel {
 // are disjoint, or empty) give 0.
 float overlap_fraction(const AABB& node, const AABB& left, const AABB& right);
 
+// Inline: the split finders evaluate it for every candidate.
+inline float CostModel::split_cost(const AABB& node, const AABB& left, size_t left_count, const AABB& right,
+                                   size_t right_count) const {
+    const float node_area = node.area();
+    // A point or a line of primitives (SA(N) = 0): no area to divide, each reference costs one test.
+    const float weighted_area = node_area > 0.0f
+                                    ? (left.area() * float(left_count) + right.area() * float(right_count)) / node_area
+                                    : float(left_count + right_count);
+    float overlap_factor = 1.0f;
+    if (overlap_penalty != 0.0f) {
+        const float overlap = overlap_fraction(node, left, right);
+        if (overlap > 0.0f) {
+            if (overlap_penalty == kInfinity) return kInfinity;  // disjoint children only
+            overlap_factor += overlap_penalty * overlap;
+        }
+    }
+    return traversal_cost + overlap_factor * intersection_cost * weighted_area;
+}
+
 }  // namespace spacebvh

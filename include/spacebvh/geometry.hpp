@@ -102,8 +102,13 @@ struct Triangle {
         return b;
     }
     constexpr Vec3 geometric_normal() const { return cross(v1 - v0, v2 - v0); }
-    // Zero-area triangles are legal input, kept in numbering, and never hit.
-    constexpr bool is_degenerate() const { return geometric_normal() == Vec3(0.0f); }
+    // Zero-area triangles are legal input, kept in numbering, and never hit. Written as comparisons
+    // of products (no subtraction) so that FMA contraction cannot change the answer between builds:
+    // the float32 cross product of the edges is exactly zero.
+    constexpr bool is_degenerate() const {
+        const Vec3 e1 = v1 - v0, e2 = v2 - v0;
+        return e1.y * e2.z == e1.z * e2.y && e1.z * e2.x == e1.x * e2.z && e1.x * e2.y == e1.y * e2.x;
+    }
     constexpr Vec3 vertex(int i) const { return i == 0 ? v0 : (i == 1 ? v1 : v2); }
 };
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "spacebvh/error.hpp"
 #include "spacebvh/geometry.hpp"
 
 namespace spacebvh {

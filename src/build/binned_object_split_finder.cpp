@@ -3,40 +3,80 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <immintrin.h>
+
+#include <algorithm>
 #include <array>
-#include <vector>
 
 namespace spacebvh::build {
 namespace {
 
+// Bins live on the stack (no allocation per node) and only the first `bins` are initialised, so a
+// small node pays for its bins, not for kMaxObjectBins. Bin boxes are kept as 4-wide registers
+// (lane 3 unused) so that one min and one max update a bin.
 struct Bin {
-    AABB bounds;
-    uint32_t count = 0;
+    __m128 lo, hi;
 };
 
 // Bins of all three axes. Merging takes min/max of boxes and sums of counts, both exact, so a
 // parallel reduction gives the same bins whatever the thread count.
 struct BinGrid {
     std::array<ObjectBinning, 3> binning;
-    std::array<std::vector<Bin>, 3> bins;
+    uint32_t bin_count;
+    Bin bins[3][kMaxObjectBins];  // only [axis][0, bin_count) are live
+    uint32_t counts[3][kMaxObjectBins];
 
-    explicit BinGrid(const std::array<ObjectBinning, 3>& b) : binning(b) {
-        for (int axis = 0; axis < 3; ++axis) bins[axis].resize(binning[axis].bins);
+    explicit BinGrid(const std::array<ObjectBinning, 3>& b) : binning(b), bin_count(b[0].bins) {
+        const __m128 empty_lo = _mm_set1_ps(kInfinity), empty_hi = _mm_set1_ps(-kInfinity);
+        for (int axis = 0; axis < 3; ++axis)
+            for (uint32_t i = 0; i < bin_count; ++i) {
+                bins[axis][i] = {empty_lo, empty_hi};
+                counts[axis][i] = 0;
+            }
     }
+    BinGrid(const BinGrid& other) : binning(other.binning), bin_count(other.bin_count) { copy_from(other); }
+    BinGrid& operator=(const BinGrid& other) {
+        binning = other.binning;
+        bin_count = other.bin_count;
+        copy_from(other);
+        return *this;
+    }
+    void copy_from(const BinGrid& other) {
+        for (int axis = 0; axis < 3; ++axis) {
+            std::copy_n(other.bins[axis], bin_count, bins[axis]);
+            std::copy_n(other.counts[axis], bin_count, counts[axis]);
+        }
+    }
+
     void add(std::span<const Reference> references) {
+        // The same float operations as ObjectBinning::bin_of, so partitioning reproduces these bins.
+        const __m128 origin = _mm_setr_ps(binning[0].origin, binning[1].origin, binning[2].origin, 0.0f);
+        const __m128 scale = _mm_setr_ps(binning[0].scale, binning[1].scale, binning[2].scale, 0.0f);
+        const __m128 last_bin = _mm_set1_ps(float(bin_count - 1));
+        const __m128 half = _mm_set1_ps(0.5f);
         for (const Reference& reference : references) {
+            // Reference is {lo.xyz, hi.xyz, primitive}: both loads stay inside it; lane 3 is ignored.
+            const __m128 lo = _mm_loadu_ps(&reference.bounds.lo.x);
+            const __m128 hi = _mm_loadu_ps(&reference.bounds.hi.x);
+            const __m128 centroid = _mm_mul_ps(half, _mm_add_ps(lo, hi));
+            const __m128 position = _mm_mul_ps(_mm_sub_ps(centroid, origin), scale);
+            const __m128 clamped = _mm_min_ps(_mm_max_ps(position, _mm_setzero_ps()), last_bin);
+            alignas(16) int32_t index[4];
+            _mm_store_si128(reinterpret_cast<__m128i*>(index), _mm_cvttps_epi32(clamped));
             for (int axis = 0; axis < 3; ++axis) {
-                Bin& bin = bins[axis][binning[axis].bin_of(reference.centroid(axis))];
-                bin.bounds.extend(reference.bounds);
-                bin.count++;
+                Bin& bin = bins[axis][index[axis]];
+                bin.lo = _mm_min_ps(bin.lo, lo);
+                bin.hi = _mm_max_ps(bin.hi, hi);
+                counts[axis][index[axis]]++;
             }
         }
     }
     void merge(const BinGrid& other) {
         for (int axis = 0; axis < 3; ++axis)
-            for (size_t i = 0; i < bins[axis].size(); ++i) {
-                bins[axis][i].bounds.extend(other.bins[axis][i].bounds);
-                bins[axis][i].count += other.bins[axis][i].count;
+            for (uint32_t i = 0; i < bin_count; ++i) {
+                bins[axis][i].lo = _mm_min_ps(bins[axis][i].lo, other.bins[axis][i].lo);
+                bins[axis][i].hi = _mm_max_ps(bins[axis][i].hi, other.bins[axis][i].hi);
+                counts[axis][i] += other.counts[axis][i];
             }
     }
 };
@@ -48,14 +88,17 @@ Split BinnedObjectSplitFinder::find(std::span<Reference> references, const Refer
     Split best;
     if (references.size() < 2) return best;
 
+    // Small nodes get fewer bins, as in Embree (heuristic_binning.h: min(B, 4 + 0.05 N)): a node of N
+    // references fills at most N bins, and initialising and sweeping unused bins dominates otherwise.
+    const uint32_t bins = std::min<uint32_t>(bins_, 4 + uint32_t(references.size() / 20));
     std::array<ObjectBinning, 3> binning;
     for (int axis = 0; axis < 3; ++axis) {
         const float extent = node.centroid_bounds.hi[axis] - node.centroid_bounds.lo[axis];
         binning[axis].axis = axis;
         binning[axis].origin = node.centroid_bounds.lo[axis];
-        binning[axis].bins = bins_;
+        binning[axis].bins = bins;
         // Slightly below B / extent so the largest centroid lands in the last bin, not past it.
-        binning[axis].scale = extent > 0.0f ? float(bins_) * (1.0f - 1e-6f) / extent : 0.0f;
+        binning[axis].scale = extent > 0.0f ? float(bins) * (1.0f - 1e-6f) / extent : 0.0f;
     }
 
     BinGrid grid(binning);
@@ -75,34 +118,47 @@ Split BinnedObjectSplitFinder::find(std::span<Reference> references, const Refer
             });
     }
 
-    std::vector<AABB> suffix_bounds(bins_);
-    std::vector<uint32_t> suffix_counts(bins_);
+    // Raw registers, not AABBs: nothing to construct for the bins a node does not use.
+    Bin suffix[kMaxObjectBins];
+    uint32_t suffix_counts[kMaxObjectBins];
+    auto to_box = [](const Bin& bin) {
+        alignas(16) float lo[4], hi[4];
+        _mm_store_ps(lo, bin.lo);
+        _mm_store_ps(hi, bin.hi);
+        return AABB{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+    };
     for (int axis = 0; axis < 3; ++axis) {
         if (binning[axis].scale == 0.0f) continue;  // all centroids on one plane: nothing to cut
-        const std::vector<Bin>& bins = grid.bins[axis];
-        AABB right;
+        const Bin* axis_bins = grid.bins[axis];
+        const uint32_t* counts = grid.counts[axis];
+        Bin right{_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity)};
         uint32_t right_count = 0;
-        for (uint32_t i = bins_; i-- > 1;) {
-            right.extend(bins[i].bounds);
-            right_count += bins[i].count;
-            suffix_bounds[i] = right;
+        for (uint32_t i = bins; i-- > 1;) {
+            right.lo = _mm_min_ps(right.lo, axis_bins[i].lo);
+            right.hi = _mm_max_ps(right.hi, axis_bins[i].hi);
+            right_count += counts[i];
+            suffix[i] = right;
             suffix_counts[i] = right_count;
         }
-        AABB left;
+        Bin left{_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity)};
         uint32_t left_count = 0;
-        for (uint32_t i = 1; i < bins_; ++i) {
-            left.extend(bins[i - 1].bounds);
-            left_count += bins[i - 1].count;
-            if (left_count == 0 || suffix_counts[i] == 0) continue;
-            const float split_cost = cost.split_cost(node.bounds, left, left_count, suffix_bounds[i], suffix_counts[i]);
+        for (uint32_t i = 1; i < bins; ++i) {
+            // An empty bin repeats the previous cut: nothing new to evaluate.
+            if (counts[i - 1] == 0) continue;
+            left.lo = _mm_min_ps(left.lo, axis_bins[i - 1].lo);
+            left.hi = _mm_max_ps(left.hi, axis_bins[i - 1].hi);
+            left_count += counts[i - 1];
+            if (suffix_counts[i] == 0) break;
+            const AABB left_box = to_box(left), right_box = to_box(suffix[i]);
+            const float split_cost = cost.split_cost(node.bounds, left_box, left_count, right_box, suffix_counts[i]);
             if (split_cost < best.cost) {
                 best.kind = SplitKind::object_binned;
                 best.cost = split_cost;
                 best.axis = axis;
                 best.binning = binning[axis];
                 best.bin = i;
-                best.left_bounds = left;
-                best.right_bounds = suffix_bounds[i];
+                best.left_bounds = left_box;
+                best.right_bounds = right_box;
                 best.left_count = left_count;
                 best.right_count = suffix_counts[i];
             }

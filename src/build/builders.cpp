@@ -63,8 +63,9 @@ void BuildOptions::validate() const {
         throw Error("max leaf size must be in [1, 1048576], got " + std::to_string(max_leaf_size));
     if (max_depth < 1 || max_depth > 1024)
         throw Error("max depth must be in [1, 1024], got " + std::to_string(max_depth));
-    if (object_bins < 2 || object_bins > 4096)
-        throw Error("object bins must be in [2, 4096], got " + std::to_string(object_bins));
+    if (object_bins < 2 || object_bins > build::kMaxObjectBins)
+        throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
+                    std::to_string(object_bins));
 }
 
 Bvh build_bvh(const Scene& scene, const BuildOptions& options) {

@@ -42,25 +42,4 @@ float overlap_fraction(const AABB& node, const AABB& left, const AABB& right) {
     return fraction;
 }
 
-float CostModel::split_cost(const AABB& node, const AABB& left, size_t left_count, const AABB& right,
-                            size_t right_count) const {
-    const float node_area = node.area();
-    float weighted_area;
-    if (node_area > 0.0f) {
-        weighted_area = (left.area() * float(left_count) + right.area() * float(right_count)) / node_area;
-    } else {
-        // A point or a line of primitives: no area to divide, each reference costs one test.
-        weighted_area = float(left_count + right_count);
-    }
-    float overlap_factor = 1.0f;
-    if (overlap_penalty != 0.0f) {
-        const float overlap = overlap_fraction(node, left, right);
-        if (overlap > 0.0f) {
-            if (std::isinf(overlap_penalty)) return kInfinity;  // disjoint children only
-            overlap_factor += overlap_penalty * overlap;
-        }
-    }
-    return traversal_cost + overlap_factor * intersection_cost * weighted_area;
-}
-
 }  // namespace spacebvh

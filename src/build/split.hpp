@@ -20,6 +20,8 @@ enum class SplitKind : uint8_t {
     object_binned,
 };
 
+inline constexpr uint32_t kMaxObjectBins = 256;
+
 struct ObjectBinning {
     int axis = 0;
     float origin = 0;  // centroid_bounds.lo[axis]

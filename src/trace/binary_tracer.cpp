@@ -163,52 +163,43 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         const uint32_t first = uint32_t(layout.triangles.size());
         for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
             const uint32_t primitive = bvh.primitives[i];
-            const Triangle& triangle = scene.triangles.at(primitive);
+            const Triangle& triangle = scene.triangles[primitive];
             if (triangle.is_degenerate()) continue;
             layout.triangles.push_back({triangle.v0, triangle.v1, triangle.v2, primitive});
         }
         return std::pair{first, uint32_t(layout.triangles.size()) - first};
     };
-    auto set_from = [&](CompactNode& node, int slot, uint32_t bvh_index, std::vector<uint32_t>& pending) {
+    // Compact node i is made from the inner BVH node inner_order[i] (breadth-first); an inner child
+    // gets the compact index it will have when it is reached.
+    std::vector<uint32_t> inner_order;
+    inner_order.reserve(bvh.nodes.size() / 2 + 1);
+    auto set_from = [&](CompactNode& node, int slot, uint32_t bvh_index) {
         const BvhNode& child = bvh.nodes[bvh_index];
         if (child.is_leaf()) {
             auto [first, count] = add_leaf(child);
             // A leaf of degenerate triangles only can never be hit: give it an empty box.
             set_child(node, slot, count ? child.bounds : AABB::empty(), first, count);
         } else {
-            set_child(node, slot, child.bounds, 0, 0);
-            pending.push_back(bvh_index);
+            set_child(node, slot, child.bounds, uint32_t(inner_order.size()), 0);
+            inner_order.push_back(bvh_index);
         }
     };
 
-    // Compact node i is made from the inner BVH node inner_order[i]; a child that is an inner node
-    // is patched with its compact index once it is reached.
-    std::vector<uint32_t> inner_order;
-    std::vector<uint32_t> compact_of(bvh.nodes.size(), kInvalidIndex);
+    layout.triangles.reserve(bvh.primitives.size());
     if (bvh.root().is_leaf()) {
         layout.nodes.resize(1);
-        std::vector<uint32_t> unused;
-        set_from(layout.nodes[0], 0, 0, unused);
+        set_from(layout.nodes[0], 0, 0);
         set_child(layout.nodes[0], 1, AABB::empty(), 0, 0);
         return;
     }
     inner_order.push_back(0);
-    compact_of[0] = 0;
-    layout.nodes.reserve(bvh.nodes.size() / 2 + 1);
+    layout.nodes.resize(bvh.nodes.size() / 2);  // a binary tree of L leaves has L - 1 inner nodes
     for (size_t i = 0; i < inner_order.size(); ++i) {
         const BvhNode& inner = bvh.nodes[inner_order[i]];
-        layout.nodes.emplace_back();
-        std::vector<uint32_t> pending;
-        set_from(layout.nodes[i], 0, inner.first, pending);
-        set_from(layout.nodes[i], 1, inner.first + 1, pending);
-        for (uint32_t p : pending) {
-            compact_of[p] = uint32_t(inner_order.size());
-            inner_order.push_back(p);
-        }
-        for (int slot = 0; slot < 2; ++slot)
-            if (layout.nodes[i].count[slot] == 0 && !bvh.nodes[inner.first + slot].is_leaf())
-                layout.nodes[i].child[slot] = compact_of[inner.first + slot];
+        set_from(layout.nodes[i], 0, inner.first);
+        set_from(layout.nodes[i], 1, inner.first + 1);
     }
+    layout.nodes.resize(inner_order.size());
 }
 
 BinaryTracer::~BinaryTracer() = default;

@@ -50,12 +50,14 @@ inline bool intersect_watertight(const Ray& ray, const WatertightRay& w, const V
     // Error bound of the edge functions: each sheared coordinate carries an error of a few ulps of
     // the magnitudes it was computed from (M), and each edge function is a difference of products of
     // those coordinates (magnitude at most S).
-    const float magnitude = std::fmax(
-        std::fmax(std::fmax(std::fabs(a[w.kx]) + std::fabs(w.shear_x * a[w.kz]), std::fabs(a[w.ky]) + std::fabs(w.shear_y * a[w.kz])),
-                  std::fmax(std::fabs(b[w.kx]) + std::fabs(w.shear_x * b[w.kz]), std::fabs(b[w.ky]) + std::fabs(w.shear_y * b[w.kz]))),
-        std::fmax(std::fabs(c[w.kx]) + std::fabs(w.shear_x * c[w.kz]), std::fabs(c[w.ky]) + std::fabs(w.shear_y * c[w.kz])));
-    const float size = std::fmax(std::fmax(std::fmax(std::fabs(ax), std::fabs(ay)), std::fmax(std::fabs(bx), std::fabs(by))),
-                                 std::fmax(std::fabs(cx), std::fabs(cy)));
+    // Plain comparisons (not std::fmax, which is an out-of-line libm call): inputs are finite here.
+    auto max = [](float x, float y) { return x > y ? x : y; };
+    auto magnitude_of = [&](const Vec3& p) {
+        return max(std::fabs(p[w.kx]) + std::fabs(w.shear_x * p[w.kz]), std::fabs(p[w.ky]) + std::fabs(w.shear_y * p[w.kz]));
+    };
+    const float magnitude = max(max(magnitude_of(a), magnitude_of(b)), magnitude_of(c));
+    const float size = max(max(max(std::fabs(ax), std::fabs(ay)), max(std::fabs(bx), std::fabs(by))),
+                           max(std::fabs(cx), std::fabs(cy)));
     const float error_bound = 32.0f * 0x1p-24f * magnitude * size;
 
     const bool clearly_outside = (u < -error_bound || v < -error_bound || wgt < -error_bound) &&

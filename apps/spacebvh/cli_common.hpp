@@ -1,0 +1,87 @@
+// Option groups shared by the subcommands, and small helpers (timing, progress, JSON output).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/scene.hpp"
+
+namespace spacebvh::cli {
+
+struct SceneOptions {
+    std::string rotate;  // "x:45,y:45,z:45"
+    float scale = 1.0f;
+    std::vector<float> translate;
+
+    void add_to(CLI::App& command);
+    SceneTransform transform() const;
+};
+
+struct BuildCliOptions {
+    std::string builder = "binned";
+    float traversal_cost = 1.0f, intersection_cost = 1.0f;
+    std::string overlap_penalty = "0";  // a number or "inf"
+    uint32_t max_leaf_size = 8, max_depth = 64, bins = 32;
+
+    void add_to(CLI::App& command, bool with_builder = true);
+    BuildOptions options(const std::string& builder_name) const;
+};
+
+struct CommonOptions {
+    unsigned threads = 0;  // 0: all cores
+    bool quiet = false;
+    std::string json_path;
+
+    void add_to(CLI::App& command);
+    // Limits oneTBB to `threads` for the lifetime of the returned object.
+    std::unique_ptr<tbb::global_control> thread_limit() const;
+    unsigned effective_threads() const;
+};
+
+struct CameraOptions {
+    std::string camera;  // "ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy"
+    uint32_t width = 1024, height = 1024;
+
+    void add_to(CLI::App& command);
+    Camera camera_for(const Scene& scene, const std::string& source, const SceneTransform& transform) const;
+};
+
+// A progress bar on stderr for work over about a second; silent when stderr is not a terminal or
+// with --quiet. Thread-safe update().
+class Progress {
+public:
+    Progress(std::string label, bool enabled);
+    ~Progress();
+    void update(double fraction);
+    std::function<void(double)> callback();
+
+private:
+    std::string label_;
+    bool enabled_;
+    std::chrono::steady_clock::time_point start_;
+    std::mutex mutex_;
+    bool drawn_ = false;
+};
+
+double milliseconds_since(std::chrono::steady_clock::time_point start);
+double median(std::vector<double> values);
+void write_json(const std::string& path, const nlohmann::json& json);
+float parse_float_or_inf(const std::string& text, const char* what);
+
+void add_info_command(CLI::App& app);
+void add_build_command(CLI::App& app);
+void add_rays_command(CLI::App& app);
+void add_trace_command(CLI::App& app);
+void add_render_command(CLI::App& app);
+void add_compare_command(CLI::App& app);
+
+}  // namespace spacebvh::cli

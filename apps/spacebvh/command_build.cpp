@@ -1,0 +1,72 @@
+// spacebvh build SCENE --builder NAME: build one tree and print its quality metrics.
+#include <cstdio>
+
+#include "cli_common.hpp"
+#include "spacebvh/metrics.hpp"
+#include "spacebvh/tracer.hpp"
+
+namespace spacebvh::cli {
+
+void add_build_command(CLI::App& app) {
+    struct Options {
+        std::string source;
+        SceneOptions scene;
+        BuildCliOptions build;
+        CommonOptions common;
+        bool no_epo = false;
+    };
+    auto options = std::make_shared<Options>();
+    CLI::App* command = app.add_subcommand("build", "build a BVH and print nodes, depth, references, bytes, SAH and EPO");
+    command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
+    options->scene.add_to(*command);
+    options->build.add_to(*command);
+    options->common.add_to(*command);
+    command->add_flag("--no-epo", options->no_epo, "skip the EPO metric (the slow one)");
+    command->callback([options] {
+        const auto limit = options->common.thread_limit();
+        const Scene scene = load_scene(options->source, options->scene.transform());
+        BuildOptions build_options = options->build.options(options->build.builder);
+        Progress progress("building", !options->common.quiet);
+        build_options.progress = progress.callback();
+        const auto start = std::chrono::steady_clock::now();
+        const Bvh bvh = build_bvh(scene, build_options);
+        const double build_ms = milliseconds_since(start);
+        const TreeStats stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
+        const BinaryTracer tracer(scene, bvh);
+
+        std::printf("scene            %s (%zu triangles)\n", scene.name.c_str(), scene.triangles.size());
+        std::printf("builder          %s, %u threads\n", bvh.builder.c_str(), options->common.effective_threads());
+        std::printf("cost model       %s, max leaf %u, max depth %u\n", build_options.cost.describe().c_str(),
+                    build_options.max_leaf_size, build_options.max_depth);
+        std::printf("build            %.1f ms\n", build_ms);
+        std::printf("nodes            %zu (%zu inner, %zu leaves)\n", stats.nodes, stats.inner_nodes, stats.leaves);
+        std::printf("depth            max %u, mean leaf %.2f\n", stats.max_depth, stats.mean_leaf_depth);
+        std::printf("references       %zu (%zu distinct triangles, %.3f per triangle)\n", stats.references,
+                    stats.distinct_primitives, double(stats.references) / double(scene.triangles.size()));
+        std::printf("bytes            %zu tree, %zu traversal layout\n", stats.bytes, tracer.memory_bytes());
+        std::printf("SAH              %.4f  (%s)\n", stats.sah, build_options.cost.describe().c_str());
+        if (!options->no_epo) std::printf("EPO              %.4f\n", stats.epo);
+
+        nlohmann::json json = {{"scene", scene.name},
+                               {"triangles", scene.triangles.size()},
+                               {"builder", bvh.builder},
+                               {"threads", options->common.effective_threads()},
+                               {"cost", {{"C_T", build_options.cost.traversal_cost},
+                                         {"C_I", build_options.cost.intersection_cost},
+                                         {"C_o", build_options.cost.describe()}}},
+                               {"build_ms", build_ms},
+                               {"nodes", stats.nodes},
+                               {"leaves", stats.leaves},
+                               {"max_depth", stats.max_depth},
+                               {"mean_leaf_depth", stats.mean_leaf_depth},
+                               {"references", stats.references},
+                               {"distinct_primitives", stats.distinct_primitives},
+                               {"bytes", stats.bytes},
+                               {"layout_bytes", tracer.memory_bytes()},
+                               {"sah", stats.sah}};
+        if (!options->no_epo) json["epo"] = stats.epo;
+        write_json(options->common.json_path, json);
+    });
+}
+
+}  // namespace spacebvh::cli

@@ -1,0 +1,288 @@
+// spacebvh compare [SCENE...]: the main job. Per scene, every builder and Embree side by side on the
+// same rays: build time, tree quality, Mrays/s (median of --runs) and work per ray for random,
+// primary and diffuse rays, each also as a ratio to the first row; and every row's answers checked
+// against Embree with disagreements settled by the exact arbiter (../shared/spec/rays.md).
+#include <cstdio>
+#include <sstream>
+
+#include "cli_common.hpp"
+#include "embree/embree_scene.hpp"
+#include "ray_sets.hpp"
+#include "spacebvh/metrics.hpp"
+#include "spacebvh/verify.hpp"
+
+namespace spacebvh::cli {
+namespace {
+
+constexpr RayKind kKinds[] = {RayKind::random, RayKind::primary, RayKind::diffuse};
+
+struct KindResult {
+    double closest_mrays = 0, occlusion_mrays = 0;
+    double nodes_per_ray = -1, triangles_per_ray = -1;  // -1: not measured (Embree)
+    size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
+    std::vector<HitRecord> closest, occlusion;
+};
+
+struct Row {
+    std::string name;
+    double build_ms = 0;
+    std::optional<TreeStats> stats;
+    KindResult kinds[3];
+};
+
+// Median Mrays/s over `runs` timed runs of `trace` (after one warm-up run that also keeps the answers).
+template <typename Trace>
+double measure_mrays(size_t ray_count, int runs, Trace&& trace) {
+    trace();
+    std::vector<double> ms;
+    for (int run = 0; run < runs; ++run) {
+        const auto start = std::chrono::steady_clock::now();
+        trace();
+        ms.push_back(milliseconds_since(start));
+    }
+    return double(ray_count) / median(ms) / 1000.0;
+}
+
+template <typename Tracer>
+void trace_kind(const Tracer& tracer, std::span<const Ray> rays, int runs, KindResult& result) {
+    std::vector<Hit> hits(rays.size());
+    std::vector<uint8_t> occluded(rays.size());
+    result.closest_mrays = measure_mrays(rays.size(), runs, [&] { tracer.intersect(rays, hits); });
+    result.occlusion_mrays = measure_mrays(rays.size(), runs, [&] { tracer.occluded(rays, occluded); });
+    result.closest.resize(rays.size());
+    result.occlusion.resize(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) {
+        result.closest[i] = to_record(hits[i]);
+        result.occlusion[i] = occlusion_record(occluded[i]);
+    }
+}
+
+std::string ratio_text(double value, double reference, int precision) {
+    std::ostringstream text;
+    text.setf(std::ios::fixed);
+    text.precision(precision);
+    text << value;
+    if (reference > 0) {
+        text.precision(2);
+        text << " (" << value / reference << "x)";
+    }
+    return text.str();
+}
+
+std::string number_or_dash(std::optional<double> value, int precision) {
+    if (!value) return "-";
+    std::ostringstream text;
+    text.setf(std::ios::fixed);
+    text.precision(precision);
+    text << *value;
+    return text.str();
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app) {
+    struct Options {
+        std::vector<std::string> sources;
+        std::string builders = "cbvh,binned";
+        std::string embree = "low,medium,high";
+        int runs = 5, build_runs = 3;
+        size_t random_count = 1000000;
+        uint64_t seed = 1;
+        bool no_verify = false, no_epo = false;
+        SceneOptions scene;
+        BuildCliOptions build;
+        CameraOptions camera;
+        CommonOptions common;
+    };
+    auto options = std::make_shared<Options>();
+    CLI::App* command = app.add_subcommand(
+        "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
+    command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
+    command->add_option("--builders", options->builders, "comma-separated builders; the first is the ratio baseline")
+        ->capture_default_str();
+    command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
+        ->capture_default_str();
+    command->add_option("--runs", options->runs, "timed runs per measurement (the median is reported)")->capture_default_str();
+    command->add_option("--build-runs", options->build_runs, "builds per builder (the median is reported)")
+        ->capture_default_str();
+    command->add_option("--random", options->random_count, "random rays per scene")->capture_default_str();
+    command->add_option("--seed", options->seed, "seed of the random and diffuse rays")->capture_default_str();
+    command->add_flag("--no-verify", options->no_verify, "skip checking answers against Embree and the arbiter");
+    command->add_flag("--no-epo", options->no_epo, "skip the EPO metric");
+    options->scene.add_to(*command);
+    options->build.add_to(*command, false);
+    options->camera.add_to(*command);
+    options->common.add_to(*command);
+
+    command->callback([options] {
+        const auto limit = options->common.thread_limit();
+        if (options->runs < 1 || options->runs > 1000) throw Error("--runs must be in [1, 1000]");
+        if (options->build_runs < 1 || options->build_runs > 1000) throw Error("--build-runs must be in [1, 1000]");
+        if (options->random_count == 0 || options->random_count > (size_t(1) << 31))
+            throw Error("--random must be in [1, 2^31]");
+        std::vector<std::string> builders;
+        for (const auto& name : CLI::detail::split(options->builders, ','))
+            if (!name.empty()) builders.push_back(options->build.options(name).builder);  // validates each
+        if (builders.empty()) throw Error("--builders names no builder");
+        std::vector<EmbreeQuality> embree_rows;
+        if (options->embree != "none")
+            for (const auto& name : CLI::detail::split(options->embree, ','))
+                if (!name.empty()) embree_rows.push_back(parse_embree_quality(name));
+
+        std::vector<std::string> sources = options->sources;
+        if (sources.empty())
+            for (const auto& name : builtin_scene_names()) sources.push_back("builtin:" + name);
+
+        const SceneTransform transform = options->scene.transform();
+        const CostModel cost = options->build.options(builders.front()).cost;
+        nlohmann::json json_scenes = nlohmann::json::array();
+        std::printf("# spacebvh compare: %u threads, %s, max leaf %u; Mrays/s = median of %d runs; ratios to %s\n\n",
+                    options->common.effective_threads(), cost.describe().c_str(), options->build.max_leaf_size,
+                    options->runs, builders.front().c_str());
+
+        for (const std::string& source : sources) {
+            const Scene scene = load_scene(source, transform);
+            RaySetParameters parameters;
+            parameters.random_count = options->random_count;
+            parameters.seed = options->seed;
+            parameters.camera = options->camera.camera_for(scene, source, transform);
+            parameters.width = options->camera.width;
+            parameters.height = options->camera.height;
+
+            std::vector<Row> rows;
+            std::optional<BinaryTracer> first_tracer;
+            std::vector<Ray> ray_sets[3];
+            Progress progress("compare " + scene.name, !options->common.quiet);
+            const size_t row_total = builders.size() + embree_rows.size();
+            auto report = [&](size_t row, double within) { progress.update((double(row) + within) / double(row_total)); };
+
+            for (size_t b = 0; b < builders.size(); ++b) {
+                Row row;
+                row.name = builders[b];
+                const BuildOptions build_options = options->build.options(builders[b]);
+                std::vector<double> build_ms;
+                Bvh bvh;
+                for (int run = 0; run < options->build_runs; ++run) {
+                    const auto start = std::chrono::steady_clock::now();
+                    bvh = build_bvh(scene, build_options);
+                    build_ms.push_back(milliseconds_since(start));
+                }
+                row.build_ms = median(build_ms);
+                row.stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
+                BinaryTracer tracer(scene, bvh);
+                if (b == 0)
+                    for (RayKind kind : kKinds) ray_sets[int(kind)] = make_ray_set(kind, scene, tracer, parameters);
+                for (RayKind kind : kKinds) {
+                    KindResult& result = row.kinds[int(kind)];
+                    trace_kind(tracer, ray_sets[int(kind)], options->runs, result);
+                    TraversalStats stats;
+                    std::vector<Hit> hits(ray_sets[int(kind)].size());
+                    tracer.intersect(ray_sets[int(kind)], hits, &stats);
+                    const double n = std::max<double>(1.0, double(hits.size()));
+                    result.nodes_per_ray = double(stats.nodes_visited) / n;
+                    result.triangles_per_ray = double(stats.triangles_tested) / n;
+                    report(b, (int(kind) + 1) / 3.0);
+                }
+                if (b == 0) first_tracer.emplace(std::move(tracer));
+                rows.push_back(std::move(row));
+            }
+            for (size_t e = 0; e < embree_rows.size(); ++e) {
+                Row row;
+                row.name = std::string("embree-") + to_string(embree_rows[e]);
+                std::vector<double> build_ms;
+                std::optional<EmbreeScene> embree;
+                for (int run = 0; run < options->build_runs; ++run) {
+                    embree.reset();
+                    embree.emplace(scene, embree_rows[e]);
+                    build_ms.push_back(embree->build_milliseconds());
+                }
+                row.build_ms = median(build_ms);
+                for (RayKind kind : kKinds) {
+                    trace_kind(*embree, ray_sets[int(kind)], options->runs, row.kinds[int(kind)]);
+                    report(builders.size() + e, (int(kind) + 1) / 3.0);
+                }
+                rows.push_back(std::move(row));
+            }
+
+            // Correctness: each row against a reference row (the first Embree row for our builders, our
+            // first builder for Embree rows); the arbiter settles every disagreement.
+            const size_t embree_reference = builders.size();
+            const bool verify = !options->no_verify && !embree_rows.empty();
+            if (verify) {
+                for (size_t r = 0; r < rows.size(); ++r) {
+                    const size_t reference = r < builders.size() ? embree_reference : 0;
+                    for (RayKind kind : kKinds) {
+                        const auto& rays = ray_sets[int(kind)];
+                        KindResult& mine = rows[r].kinds[int(kind)];
+                        const KindResult& theirs = rows[reference].kinds[int(kind)];
+                        mine.wrong = verify_against_reference(scene, rays, mine.closest, theirs.closest, false).ours_wrong +
+                                     verify_against_reference(scene, rays, mine.occlusion, theirs.occlusion, true).ours_wrong;
+                    }
+                }
+            }
+
+            // The table.
+            std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(),
+                        scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(), parameters.width,
+                        parameters.height, ray_sets[2].size());
+            std::printf("| builder | build ms | nodes | refs | SAH | EPO |");
+            for (RayKind kind : kKinds)
+                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s nodes/ray |", to_string(kind), to_string(kind), to_string(kind));
+            std::printf(" wrong |\n|---|---:|---:|---:|---:|---:|");
+            for (int i = 0; i < 3; ++i) std::printf("---:|---:|---:|");
+            std::printf("---:|\n");
+            const Row& base = rows.front();
+            nlohmann::json json_rows = nlohmann::json::array();
+            for (const Row& row : rows) {
+                const bool ours = row.stats.has_value();
+                std::printf("| %s | %s | %s | %s | %s | %s |", row.name.c_str(),
+                            ratio_text(row.build_ms, base.build_ms, 1).c_str(),
+                            ours ? std::to_string(row.stats->nodes).c_str() : "-",
+                            ours ? std::to_string(row.stats->references).c_str() : "-",
+                            number_or_dash(ours ? std::optional(row.stats->sah) : std::nullopt, 2).c_str(),
+                            number_or_dash(ours && !options->no_epo ? std::optional(row.stats->epo) : std::nullopt, 2).c_str());
+                nlohmann::json json_row = {{"builder", row.name}, {"build_ms", row.build_ms}};
+                if (ours) {
+                    json_row["nodes"] = row.stats->nodes;
+                    json_row["references"] = row.stats->references;
+                    json_row["sah"] = row.stats->sah;
+                    if (!options->no_epo) json_row["epo"] = row.stats->epo;
+                    json_row["bytes"] = row.stats->bytes;
+                    json_row["max_depth"] = row.stats->max_depth;
+                }
+                size_t wrong = 0;
+                for (RayKind kind : kKinds) {
+                    const KindResult& k = row.kinds[int(kind)];
+                    const KindResult& bk = base.kinds[int(kind)];
+                    std::printf(" %s | %s | %s |", ratio_text(k.closest_mrays, bk.closest_mrays, 2).c_str(),
+                                ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(),
+                                number_or_dash(k.nodes_per_ray >= 0 ? std::optional(k.nodes_per_ray) : std::nullopt, 1).c_str());
+                    nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays}, {"occlusion_mrays", k.occlusion_mrays}};
+                    if (k.nodes_per_ray >= 0) {
+                        json_kind["nodes_per_ray"] = k.nodes_per_ray;
+                        json_kind["triangles_per_ray"] = k.triangles_per_ray;
+                    }
+                    if (verify) json_kind["wrong"] = k.wrong;
+                    json_row[to_string(kind)] = json_kind;
+                    wrong += k.wrong;
+                }
+                std::printf(" %s |\n", verify ? std::to_string(wrong).c_str() : "-");
+                json_rows.push_back(json_row);
+            }
+            std::printf("\n");
+            std::fflush(stdout);
+            json_scenes.push_back({{"scene", scene.name},
+                                   {"source", source},
+                                   {"triangles", scene.triangles.size()},
+                                   {"rays", {{"random", ray_sets[0].size()}, {"primary", ray_sets[1].size()},
+                                             {"diffuse", ray_sets[2].size()}}},
+                                   {"rows", json_rows}});
+        }
+        write_json(options->common.json_path, {{"threads", options->common.effective_threads()},
+                                               {"cost", cost.describe()},
+                                               {"runs", options->runs},
+                                               {"scenes", json_scenes}});
+    });
+}
+
+}  // namespace spacebvh::cli

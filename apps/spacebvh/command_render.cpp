@@ -1,0 +1,66 @@
+// spacebvh render SCENE -o image.png [--heatmap]: a shaded picture or a traversal-cost heat map.
+#include <cstdio>
+
+#include "cli_common.hpp"
+#include "spacebvh/render.hpp"
+
+namespace spacebvh::cli {
+
+void add_render_command(CLI::App& app) {
+    struct Options {
+        std::string source, output;
+        bool heatmap = false;
+        std::string quantity = "work";
+        SceneOptions scene;
+        BuildCliOptions build;
+        CameraOptions camera;
+        CommonOptions common;
+    };
+    auto options = std::make_shared<Options>();
+    CLI::App* command = app.add_subcommand("render", "render a shaded image or a heat map of traversal cost per pixel");
+    command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
+    command->add_option("--output,-o", options->output, "PNG file to write")->required();
+    command->add_flag("--heatmap", options->heatmap, "colour pixels by traversal cost, with a colour legend");
+    command->add_option("--quantity", options->quantity, "heat map quantity: work (nodes + triangles), nodes, triangles")
+        ->capture_default_str();
+    options->scene.add_to(*command);
+    options->build.add_to(*command);
+    options->camera.add_to(*command);
+    options->common.add_to(*command);
+    command->callback([options] {
+        const auto limit = options->common.thread_limit();
+        const SceneTransform transform = options->scene.transform();
+        const Scene scene = load_scene(options->source, transform);
+        const Camera camera = options->camera.camera_for(scene, options->source, transform);
+        const BuildOptions build_options = options->build.options(options->build.builder);
+        const Bvh bvh = build_bvh(scene, build_options);
+        const BinaryTracer tracer(scene, bvh);
+        const uint32_t width = options->camera.width, height = options->camera.height;
+        if (!options->heatmap) {
+            write_png(options->output, render_shaded(scene, tracer, camera, width, height));
+            std::printf("wrote %s (%ux%u, shaded, builder %s)\n", options->output.c_str(), width, height, bvh.builder.c_str());
+            return;
+        }
+        HeatmapOptions heatmap;
+        if (options->quantity == "work") heatmap.quantity = HeatmapQuantity::work;
+        else if (options->quantity == "nodes") heatmap.quantity = HeatmapQuantity::nodes_visited;
+        else if (options->quantity == "triangles") heatmap.quantity = HeatmapQuantity::triangles_tested;
+        else throw Error("--quantity must be work, nodes or triangles, got '" + options->quantity + "'");
+        HeatmapInfo info;
+        write_png(options->output, render_heatmap(scene, tracer, camera, width, height, &info, heatmap));
+        const double pixels = double(width) * height;
+        std::printf("wrote %s (%ux%u heat map of %s, builder %s, %s): mean %.1f, max %llu, colour scale top %.1f; "
+                    "per ray %.2f nodes, %.2f triangles\n",
+                    options->output.c_str(), width, height, options->quantity.c_str(), bvh.builder.c_str(),
+                    build_options.cost.describe().c_str(), info.mean_value, (unsigned long long)info.max_value,
+                    info.scale_max, double(info.totals.nodes_visited) / pixels,
+                    double(info.totals.triangles_tested) / pixels);
+        write_json(options->common.json_path, {{"output", options->output},
+                                               {"builder", bvh.builder},
+                                               {"mean", info.mean_value},
+                                               {"max", info.max_value},
+                                               {"scale_max", info.scale_max}});
+    });
+}
+
+}  // namespace spacebvh::cli

@@ -1,0 +1,67 @@
+// spacebvh trace SCENE --rays FILE --hits FILE [--occlusion]: answer a ray file with a hit file.
+#include <cstdio>
+
+#include "cli_common.hpp"
+#include "spacebvh/rays.hpp"
+#include "spacebvh/tracer.hpp"
+
+namespace spacebvh::cli {
+
+void add_trace_command(CLI::App& app) {
+    struct Options {
+        std::string source, rays_path, hits_path;
+        bool occlusion = false, stats = false;
+        SceneOptions scene;
+        BuildCliOptions build;
+        CommonOptions common;
+    };
+    auto options = std::make_shared<Options>();
+    CLI::App* command = app.add_subcommand("trace", "trace a ray file and write a hit file (closest hit or occlusion)");
+    command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
+    command->add_option("--rays", options->rays_path, "ray file (REFRAYS1)")->required();
+    command->add_option("--hits", options->hits_path, "hit file to write (REFHITS1)")->required();
+    command->add_flag("--occlusion", options->occlusion, "any-hit queries: t = 0 occluded, +inf free");
+    command->add_flag("--stats", options->stats, "count nodes visited and triangles tested per ray");
+    options->scene.add_to(*command);
+    options->build.add_to(*command);
+    options->common.add_to(*command);
+    command->callback([options] {
+        const auto limit = options->common.thread_limit();
+        const Scene scene = load_scene(options->source, options->scene.transform());
+        const std::vector<Ray> rays = read_ray_file(options->rays_path);
+        const BuildOptions build_options = options->build.options(options->build.builder);
+        const Bvh bvh = build_bvh(scene, build_options);
+        const BinaryTracer tracer(scene, bvh);
+        TraversalStats stats;
+        TraversalStats* stats_out = options->stats ? &stats : nullptr;
+        std::vector<HitRecord> records(rays.size());
+        size_t hit_count = 0;
+        const auto start = std::chrono::steady_clock::now();
+        if (options->occlusion) {
+            std::vector<uint8_t> occluded(rays.size());
+            tracer.occluded(rays, occluded, stats_out);
+            for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
+        } else {
+            std::vector<Hit> hits(rays.size());
+            tracer.intersect(rays, hits, stats_out);
+            for (size_t i = 0; i < rays.size(); ++i) records[i] = to_record(hits[i]);
+        }
+        const double trace_ms = milliseconds_since(start);
+        for (const HitRecord& record : records) hit_count += record.is_hit();
+        write_hit_file(options->hits_path, records);
+        std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s)\n", rays.size(), hit_count,
+                    options->occlusion ? "occluded" : "hits", trace_ms, double(rays.size()) / trace_ms / 1000.0,
+                    options->common.effective_threads(), bvh.builder.c_str(), build_options.cost.describe().c_str());
+        nlohmann::json json = {{"rays", rays.size()}, {"hits", hit_count}, {"trace_ms", trace_ms}, {"builder", bvh.builder}};
+        if (options->stats && !rays.empty()) {
+            const double n = double(rays.size());
+            std::printf("per ray: %.2f nodes visited, %.2f triangles tested\n", double(stats.nodes_visited) / n,
+                        double(stats.triangles_tested) / n);
+            json["nodes_per_ray"] = double(stats.nodes_visited) / n;
+            json["triangles_per_ray"] = double(stats.triangles_tested) / n;
+        }
+        write_json(options->common.json_path, json);
+    });
+}
+
+}  // namespace spacebvh::cli

@@ -1,0 +1,33 @@
+// spacebvh: build, inspect, trace and compare BVHs built by space subdivision.
+#include <cstdio>
+#include <exception>
+
+#include "cli_common.hpp"
+#include "spacebvh/error.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"spacebvh: BVHs by space subdivision (Popov et al. 2009) - build, trace, measure, compare with Embree"};
+    app.require_subcommand(1);
+    app.set_help_all_flag("--help-all", "help for every subcommand");
+    spacebvh::cli::add_info_command(app);
+    spacebvh::cli::add_build_command(app);
+    spacebvh::cli::add_rays_command(app);
+    spacebvh::cli::add_trace_command(app);
+    spacebvh::cli::add_render_command(app);
+    spacebvh::cli::add_compare_command(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const spacebvh::Error& e) {
+        std::fprintf(stderr, "spacebvh: error: %s\n", e.what());
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "spacebvh: error: out of memory\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "spacebvh: internal error: %s\n", e.what());
+        return 3;
+    }
+    return 0;
+}

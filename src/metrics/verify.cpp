@@ -1,0 +1,164 @@
+// Ray-by-ray checking of ../shared/spec/rays.md ("Files": agreement rule and arbiter).
+#include "spacebvh/verify.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/combinable.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include "spacebvh/error.hpp"
+
+namespace spacebvh {
+
+namespace {
+
+struct DVec3 {
+    double x, y, z;
+};
+DVec3 dsub(Vec3 a, Vec3 b) { return {double(a.x) - double(b.x), double(a.y) - double(b.y), double(a.z) - double(b.z)}; }
+DVec3 dcross(const DVec3& a, const DVec3& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double ddot(const DVec3& a, const DVec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// Zero area as the scene conventions count it: the float32 cross product of the edges is exactly
+// zero. Written as comparisons of the products (not differences) so that the answer cannot change
+// when the compiler fuses a multiply and a subtraction into an FMA (-march=native does that to
+// Triangle::is_degenerate()); this keeps the arbiter the same whatever the build flags.
+bool zero_area_float32(const Triangle& tri) {
+    const Vec3 e1 = tri.v1 - tri.v0;
+    const Vec3 e2 = tri.v2 - tri.v0;
+    return e1.y * e2.z == e1.z * e2.y && e1.z * e2.x == e1.x * e2.z && e1.x * e2.y == e1.y * e2.x;
+}
+
+// Which side of the directed edge p -> q the ray passes (Plücker side test in double precision,
+// with p_rel = p - org, q_rel = q - org): dot(dir, cross(p_rel, q_rel)). Evaluated with the two
+// endpoints in a canonical order and negated when swapped, so two triangles sharing the edge get
+// exactly opposite values whatever rounding or FMA does: a ray can never slip between them
+// (watertight), and a ray exactly on the edge gets 0 and hits both (closed triangles). Not inlined,
+// so every call site runs the very same instructions (the same FMA choices).
+[[gnu::noinline]] double edge_side(const DVec3& dir, Vec3 p, const DVec3& p_rel, Vec3 q, const DVec3& q_rel) {
+    const bool q_first = q.x < p.x || (q.x == p.x && (q.y < p.y || (q.y == p.y && q.z < p.z)));
+    if (q_first) return -ddot(dir, dcross(q_rel, p_rel));
+    return ddot(dir, dcross(p_rel, q_rel));
+}
+
+// Running totals of one thread; keeps only the smallest wrong indices so memory stays bounded.
+constexpr size_t kMaxWrongRays = 32;
+struct Tally {
+    size_t disagreements = 0, ours_wrong = 0, reference_wrong = 0;
+    std::vector<size_t> wrong_rays;
+    void add_wrong(size_t index) {
+        wrong_rays.push_back(index);
+        if (wrong_rays.size() >= 4 * kMaxWrongRays) trim();
+    }
+    void trim() {
+        std::sort(wrong_rays.begin(), wrong_rays.end());
+        if (wrong_rays.size() > kMaxWrongRays) wrong_rays.resize(kMaxWrongRays);
+    }
+};
+
+}  // namespace
+
+std::optional<double> intersect_triangle_exact(const Ray& ray, const Triangle& tri) {
+    if (zero_area_float32(tri)) return std::nullopt;  // degenerate: never hit (spec, scene conventions)
+
+    const DVec3 dir{ray.dir.x, ray.dir.y, ray.dir.z};
+    const DVec3 a = dsub(tri.v0, ray.org);
+    const DVec3 b = dsub(tri.v1, ray.org);
+    const DVec3 c = dsub(tri.v2, ray.org);
+
+    // Edge functions of the edges opposite v0, v1, v2 (Plücker). Inside, including the boundary,
+    // when none has a sign different from the others. This is double precision rather than exact
+    // arithmetic: a value within about 1e-16 (relative) of zero may round to either side, but always
+    // the same way for both triangles of a shared edge, which is what closedness and watertightness need.
+    const double u = edge_side(dir, tri.v1, b, tri.v2, c);
+    const double v = edge_side(dir, tri.v2, c, tri.v0, a);
+    if ((u < 0.0 && v > 0.0) || (u > 0.0 && v < 0.0)) return std::nullopt;  // early out: most misses
+    const double w = edge_side(dir, tri.v0, a, tri.v1, b);
+    const bool any_negative = u < 0.0 || v < 0.0 || w < 0.0;
+    const bool any_positive = u > 0.0 || v > 0.0 || w > 0.0;
+    if (any_negative && any_positive) return std::nullopt;
+    if (!any_negative && !any_positive) return std::nullopt;  // ray in the triangle's plane: no hit
+
+    // Distance along the ray to the plane, in units of |dir|: t = dot(n, v0 - org) / dot(n, dir).
+    const DVec3 n = dcross(dsub(tri.v1, tri.v0), dsub(tri.v2, tri.v0));
+    const double denominator = ddot(n, dir);
+    if (denominator == 0.0) return std::nullopt;
+    const double t = ddot(n, a) / denominator;
+    if (!(t >= double(ray.tmin) && t <= double(ray.tmax))) return std::nullopt;
+    return t;
+}
+
+HitRecord arbiter_closest_hit(const Scene& scene, const Ray& ray) {
+    double best_t = std::numeric_limits<double>::infinity();
+    uint32_t best = kInvalidIndex;
+    for (size_t i = 0; i < scene.triangles.size(); ++i) {
+        const std::optional<double> t = intersect_triangle_exact(ray, scene.triangles[i]);
+        if (t && *t < best_t) {  // strict: equal t keeps the lower index, so the answer is deterministic
+            best_t = *t;
+            best = uint32_t(i);
+        }
+    }
+    if (best == kInvalidIndex) return {};
+    return {float(best_t), best};
+}
+
+HitRecord arbiter_occlusion(const Scene& scene, const Ray& ray) {
+    for (const Triangle& tri : scene.triangles)
+        if (intersect_triangle_exact(ray, tri)) return occlusion_record(true);
+    return occlusion_record(false);
+}
+
+bool hits_agree(const HitRecord& a, const HitRecord& b, const Ray& ray, float scene_diagonal) {
+    if (!a.is_hit() || !b.is_hit()) return a.is_hit() == b.is_hit();
+    const double ta = a.t, tb = b.t;
+    const double dir_length =
+        std::sqrt(double(ray.dir.x) * ray.dir.x + double(ray.dir.y) * ray.dir.y + double(ray.dir.z) * ray.dir.z);
+    const double tolerance = 1e-4 * std::max(std::abs(ta), std::abs(tb)) + 1e-6 * double(scene_diagonal) / dir_length;
+    return std::abs(ta - tb) <= tolerance;
+}
+
+VerificationReport verify_against_reference(const Scene& scene, std::span<const Ray> rays,
+                                            std::span<const HitRecord> ours,
+                                            std::span<const HitRecord> reference, bool occlusion) {
+    if (ours.size() != rays.size() || reference.size() != rays.size())
+        throw Error("verify: " + std::to_string(rays.size()) + " rays but " + std::to_string(ours.size()) +
+                    " of our answers and " + std::to_string(reference.size()) + " reference answers");
+    const float diagonal = scene.diagonal();
+
+    tbb::combinable<Tally> tallies;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+        Tally& tally = tallies.local();
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            if (hits_agree(ours[i], reference[i], rays[i], diagonal)) continue;
+            // Only disagreements pay for the brute-force arbiter.
+            ++tally.disagreements;
+            const HitRecord truth =
+                occlusion ? arbiter_occlusion(scene, rays[i]) : arbiter_closest_hit(scene, rays[i]);
+            if (!hits_agree(ours[i], truth, rays[i], diagonal)) {
+                ++tally.ours_wrong;
+                tally.add_wrong(i);
+            }
+            if (!hits_agree(reference[i], truth, rays[i], diagonal)) ++tally.reference_wrong;
+        }
+    });
+
+    VerificationReport report;
+    report.rays = rays.size();
+    tallies.combine_each([&](const Tally& t) {
+        report.disagreements += t.disagreements;
+        report.ours_wrong += t.ours_wrong;
+        report.reference_wrong += t.reference_wrong;
+        report.wrong_rays.insert(report.wrong_rays.end(), t.wrong_rays.begin(), t.wrong_rays.end());
+    });
+    // The smallest indices, sorted: the same report whatever the thread schedule.
+    std::sort(report.wrong_rays.begin(), report.wrong_rays.end());
+    if (report.wrong_rays.size() > kMaxWrongRays) report.wrong_rays.resize(kMaxWrongRays);
+    return report;
+}
+
+}  // namespace spacebvh
