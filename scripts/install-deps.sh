@@ -6,7 +6,6 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libtbb-dev            # oneTBB: parallel build and tracing
   libembree-dev         # Embree 3: the yardstick in `spacebvh compare` and the test oracle
-  libtinyobjloader-dev  # OBJ scenes
   libtinygltf-dev       # glTF 2.0 scenes (.gltf/.glb)
   libstb-dev            # PNG output (stb_image_write)
   libcli11-dev          # command line

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "spacebvh/tracer.hpp"
+#include "trace/huge_page_allocator.hpp"
 #include "trace/watertight_triangle.hpp"
 
 namespace spacebvh {
@@ -26,8 +27,8 @@ struct LeafTriangle {
 };
 
 struct BinaryTracer::Layout {
-    std::vector<CompactNode> nodes;
-    std::vector<LeafTriangle> triangles;
+    std::vector<CompactNode, trace::HugePageAllocator<CompactNode>> nodes;
+    std::vector<LeafTriangle, trace::HugePageAllocator<LeafTriangle>> triangles;
 };
 
 namespace {
@@ -114,6 +115,13 @@ bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, Trav
 
     while (true) {
         const CompactNode& node = layout.nodes[node_index];
+        // The walk is bound by memory latency: start fetching both children (node or leaf triangles)
+        // now, so the fetch overlaps this node's box tests.
+        for (int slot = 0; slot < 2; ++slot) {
+            const char* next = node.count[slot] ? reinterpret_cast<const char*>(&layout.triangles[node.child[slot]])
+                                                : reinterpret_cast<const char*>(&layout.nodes[node.child[slot]]);
+            _mm_prefetch(next, _MM_HINT_T0);
+        }
         if constexpr (kStats) stats->nodes_visited += 2;
         float entry[2];
         const int mask = intersect_children(node, slab, ray.tmin, tmax, entry);
@@ -169,37 +177,48 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         }
         return std::pair{first, uint32_t(layout.triangles.size()) - first};
     };
-    // Compact node i is made from the inner BVH node inner_order[i] (breadth-first); an inner child
-    // gets the compact index it will have when it is reached.
-    std::vector<uint32_t> inner_order;
-    inner_order.reserve(bvh.nodes.size() / 2 + 1);
-    auto set_from = [&](CompactNode& node, int slot, uint32_t bvh_index) {
+    // Depth-first order: a node's first inner child directly follows it, so a descent tends to stay
+    // within neighbouring cache lines. `pending` holds inner BVH nodes whose compact node is not made
+    // yet, with the place (compact node, slot) that must point at it.
+    struct Pending {
+        uint32_t bvh_index, parent, slot;
+    };
+    std::vector<Pending> pending;
+    auto set_from = [&](uint32_t compact, int slot, uint32_t bvh_index) {
         const BvhNode& child = bvh.nodes[bvh_index];
         if (child.is_leaf()) {
             auto [first, count] = add_leaf(child);
             // A leaf of degenerate triangles only can never be hit: give it an empty box.
-            set_child(node, slot, count ? child.bounds : AABB::empty(), first, count);
+            set_child(layout.nodes[compact], slot, count ? child.bounds : AABB::empty(), first, count);
         } else {
-            set_child(node, slot, child.bounds, uint32_t(inner_order.size()), 0);
-            inner_order.push_back(bvh_index);
+            set_child(layout.nodes[compact], slot, child.bounds, 0, 0);
         }
     };
 
     layout.triangles.reserve(bvh.primitives.size());
+    layout.nodes.reserve(bvh.nodes.size() / 2 + 1);  // a binary tree of L leaves has L - 1 inner nodes
+    layout.nodes.emplace_back();
     if (bvh.root().is_leaf()) {
-        layout.nodes.resize(1);
-        set_from(layout.nodes[0], 0, 0);
+        set_from(0, 0, 0);
         set_child(layout.nodes[0], 1, AABB::empty(), 0, 0);
         return;
     }
-    inner_order.push_back(0);
-    layout.nodes.resize(bvh.nodes.size() / 2);  // a binary tree of L leaves has L - 1 inner nodes
-    for (size_t i = 0; i < inner_order.size(); ++i) {
-        const BvhNode& inner = bvh.nodes[inner_order[i]];
-        set_from(layout.nodes[i], 0, inner.first);
-        set_from(layout.nodes[i], 1, inner.first + 1);
+    pending.push_back({0, kInvalidIndex, 0});
+    while (!pending.empty()) {
+        const Pending next = pending.back();
+        pending.pop_back();
+        uint32_t compact = 0;
+        if (next.parent != kInvalidIndex) {
+            compact = uint32_t(layout.nodes.size());
+            layout.nodes.emplace_back();
+            layout.nodes[next.parent].child[next.slot] = compact;
+        }
+        const BvhNode& inner = bvh.nodes[next.bvh_index];
+        for (int slot = 0; slot < 2; ++slot) set_from(compact, slot, inner.first + slot);
+        // Right first onto the stack, so the left subtree is laid out right after this node.
+        for (int slot = 1; slot >= 0; --slot)
+            if (!bvh.nodes[inner.first + slot].is_leaf()) pending.push_back({inner.first + uint32_t(slot), compact, uint32_t(slot)});
     }
-    layout.nodes.resize(inner_order.size());
 }
 
 BinaryTracer::~BinaryTracer() = default;

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Configures and builds spacebvh (Release, -O3 -march=native) into ./build.
+# SPACEBVH_PORTABLE=1 builds without -march=native.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+native=ON
+[ "${SPACEBVH_PORTABLE:-0}" = "1" ] && native=OFF
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=$native >/dev/null
+cmake --build build -j "$(nproc)"
