@@ -50,23 +50,29 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     }
     command.add_option("--ct", traversal_cost, "C_T, cost of a traversal step")->capture_default_str();
     command.add_option("--ci", intersection_cost, "C_I, cost of a triangle test")->capture_default_str();
-    command.add_option("--co", overlap_penalty, "C_o, overlap penalty (0 = plain SAH, inf = disjoint children only)")
-        ->capture_default_str();
+    command.add_option("--co", overlap_penalty,
+                       "C_o, overlap penalty (0 = plain SAH, inf = disjoint children only; default: the builder's)");
     command.add_option("--max-leaf", max_leaf_size, "largest leaf (nodes with more references are split)")
         ->capture_default_str();
     command.add_option("--max-depth", max_depth, "deepest level; nodes there become leaves")->capture_default_str();
-    command.add_option("--bins", bins, "bins per axis of binned search spaces")->capture_default_str();
+    command.add_option("--bins", bins, "bins per axis of the binned object search space")->capture_default_str();
+    command.add_option("--spatial-bins", spatial_bins, "bins per axis of the spatial search space")->capture_default_str();
+    command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
+        ->capture_default_str();
+    command.add_flag("--no-unsplitting", no_unsplitting, "clip every straddling reference into both children");
 }
 
 BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
-    BuildOptions options;
-    options.builder = builder_name;
+    BuildOptions options = options_for(builder_name);
     options.cost.traversal_cost = traversal_cost;
     options.cost.intersection_cost = intersection_cost;
-    options.cost.overlap_penalty = parse_float_or_inf(overlap_penalty, "--co");
+    if (!overlap_penalty.empty()) options.cost.overlap_penalty = parse_float_or_inf(overlap_penalty, "--co");
     options.max_leaf_size = max_leaf_size;
     options.max_depth = max_depth;
     options.object_bins = bins;
+    options.spatial_bins = spatial_bins;
+    options.reference_budget = reference_budget;
+    options.unsplitting = !no_unsplitting;
     options.validate();
     return options;
 }

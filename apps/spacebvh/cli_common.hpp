@@ -29,8 +29,10 @@ struct SceneOptions {
 struct BuildCliOptions {
     std::string builder = "binned";
     float traversal_cost = 1.0f, intersection_cost = 1.0f;
-    std::string overlap_penalty = "0";  // a number or "inf"
-    uint32_t max_leaf_size = 8, max_depth = 64, bins = 32;
+    std::string overlap_penalty;  // a number or "inf"; empty: the builder's own default
+    uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
+    float reference_budget = 1.3f;
+    bool no_unsplitting = false;
 
     void add_to(CLI::App& command, bool with_builder = true);
     BuildOptions options(const std::string& builder_name) const;

@@ -40,15 +40,22 @@ struct Bvh {
 enum class SearchSpace : uint32_t {
     object_sweep = 1u << 0,   // exact SAH sweep over centroid-sorted references, all axes (CBVH)
     object_binned = 1u << 1,  // binned object SAH (Wald 2007)
+    spatial_binned = 1u << 2, // kd planes on B bins per axis, straddlers clipped (Stich et al. 2009)
 };
 constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
 
 struct BuildOptions {
     std::string builder = "binned";  // a name from builder_names()
+    // C_T, C_I, C_o. Use options_for(builder) to start from the preset's default C_o.
     CostModel cost;
     uint32_t max_leaf_size = 8;  // a node with more references is always split
     uint32_t max_depth = 64;     // nodes at this depth become leaves whatever their size
     uint32_t object_bins = 32;   // bins per axis of the binned object search space (2..256)
+    uint32_t spatial_bins = 32;  // bins per axis of the binned spatial search space (2..1024)
+    // Spatial splits may grow the references to at most this multiple of the triangle count; the
+    // budget is shared deterministically among subtrees and always honoured.
+    float reference_budget = 1.3f;
+    bool unsplitting = true;  // reference unsplitting (Stich et al. 2009) in spatial splits
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;
@@ -57,8 +64,10 @@ struct BuildOptions {
     void validate() const;
 };
 
-// Named builders: "cbvh" (exact object sweep), "binned" (binned object SAH).
+// Named builders: "cbvh", "binned", "kdbvh", "spatial", "sbvh" (see describe_builder).
 std::vector<std::string> builder_names();
+// Options with the preset's defaults (its overlap penalty C_o). Throws Error for an unknown name.
+BuildOptions options_for(const std::string& builder);
 // One line each, for --help.
 std::string describe_builder(const std::string& name);
 

@@ -83,8 +83,9 @@ struct BinGrid {
 
 }  // namespace
 
-Split BinnedObjectSplitFinder::find(std::span<Reference> references, const ReferenceSummary& node,
-                                    const CostModel& cost) const {
+Split BinnedObjectSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    const std::span<Reference> references = context.references;
+    const ReferenceSummary& node = context.summary;
     Split best;
     if (references.size() < 2) return best;
 

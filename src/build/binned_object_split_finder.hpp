@@ -10,7 +10,7 @@ class BinnedObjectSplitFinder final : public SplitFinder {
 public:
     explicit BinnedObjectSplitFinder(uint32_t bins) : bins_(bins) {}
     const char* name() const override { return "object-binned"; }
-    Split find(std::span<Reference> references, const ReferenceSummary& node, const CostModel& cost) const override;
+    Split find(const NodeContext& node, const CostModel& cost) const override;
 
 private:
     uint32_t bins_;

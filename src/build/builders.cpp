@@ -2,7 +2,9 @@
 #include <sstream>
 
 #include "build/binned_object_split_finder.hpp"
+#include "build/binned_spatial_split_finder.hpp"
 #include "build/object_sweep_split_finder.hpp"
+#include "build/presplit.hpp"
 #include "build/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
@@ -10,17 +12,34 @@
 namespace spacebvh {
 namespace {
 
+enum class Presplit { none, early_split_clipping, edge_volume_heuristic };
+
 struct BuilderPreset {
     const char* name;
     uint32_t search_spaces;
+    Presplit presplit;
+    float overlap_penalty;     // default C_o
+    bool allow_unsplitting;    // kdbvh keeps children disjoint, so never unsplits
+    float spatial_gate_alpha;  // try spatial splits only above this overlap area / SA(root)
     const char* description;
 };
 
+constexpr float kInf = kInfinity;
 constexpr BuilderPreset kPresets[] = {
-    {"cbvh", uint32_t(SearchSpace::object_sweep),
+    {"cbvh", uint32_t(SearchSpace::object_sweep), Presplit::none, 0.0f, false, 0.0f,
      "classical BVH: exact SAH sweep over centroid-sorted references on all three axes (Popov et al.'s CBVH)"},
-    {"binned", uint32_t(SearchSpace::object_binned),
+    {"binned", uint32_t(SearchSpace::object_binned), Presplit::none, 0.0f, false, 0.0f,
      "binned object SAH (Wald 2007), --bins bins per axis; the fast classical builder"},
+    {"kdbvh", uint32_t(SearchSpace::spatial_binned), Presplit::none, kInf, false, 0.0f,
+     "spatial (kd) search space only: planes on --spatial-bins bins, straddlers clipped; disjoint children (KDBVH)"},
+    {"spatial", SearchSpace::object_sweep | SearchSpace::spatial_binned, Presplit::none, 1.0f, true, 0.0f,
+     "object sweep + spatial planes chosen by the overlap-penalised SAH (--co), with unsplitting: the practical builder"},
+    {"sbvh", SearchSpace::object_sweep | SearchSpace::spatial_binned, Presplit::none, 0.0f, true, 1e-5f,
+     "SBVH (Stich et al. 2009): object sweep + binned spatial with unsplitting, spatial tried when object overlap >= 1e-5 SA(root)"},
+    {"esc", uint32_t(SearchSpace::object_sweep), Presplit::early_split_clipping, 0.0f, false, 0.0f,
+     "early split clipping (Ernst & Greiner 2007) pre-splits references within the budget, then the cbvh search"},
+    {"evh", uint32_t(SearchSpace::object_sweep), Presplit::edge_volume_heuristic, 0.0f, false, 0.0f,
+     "edge volume heuristic (Dammertz & Keller 2008, t = 14) pre-splits triangles within the budget, then the cbvh search"},
 };
 
 const BuilderPreset* find_preset(const std::string& name) {
@@ -29,12 +48,22 @@ const BuilderPreset* find_preset(const std::string& name) {
     return nullptr;
 }
 
-// One place that turns a set of search spaces into split finders, for every preset.
-std::vector<std::unique_ptr<build::SplitFinder>> make_search_spaces(uint32_t spaces, const BuildOptions& options) {
+// One place that turns a set of search spaces into split finders, for every preset. Object spaces
+// come first: the spatial gate looks at the best object split.
+std::vector<std::unique_ptr<build::SplitFinder>> make_search_spaces(const BuilderPreset& preset, const Scene& scene,
+                                                                    const BuildOptions& options) {
+    const uint32_t spaces = preset.search_spaces;
     std::vector<std::unique_ptr<build::SplitFinder>> finders;
     if (spaces & uint32_t(SearchSpace::object_sweep)) finders.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
     if (spaces & uint32_t(SearchSpace::object_binned))
         finders.push_back(std::make_unique<build::BinnedObjectSplitFinder>(options.object_bins));
+    if (spaces & uint32_t(SearchSpace::spatial_binned)) {
+        build::SpatialSearchOptions spatial;
+        spatial.bins = options.spatial_bins;
+        spatial.unsplit = options.unsplitting && preset.allow_unsplitting;
+        spatial.gate_alpha = preset.spatial_gate_alpha;
+        finders.push_back(std::make_unique<build::BinnedSpatialSplitFinder>(scene.triangles, spatial));
+    }
     return finders;
 }
 
@@ -44,6 +73,15 @@ std::vector<std::string> builder_names() {
     std::vector<std::string> names;
     for (const BuilderPreset& preset : kPresets) names.emplace_back(preset.name);
     return names;
+}
+
+BuildOptions options_for(const std::string& builder) {
+    const BuilderPreset* preset = find_preset(builder);
+    BuildOptions options;
+    options.builder = builder;
+    if (!preset) options.validate();  // throws the unknown-builder error
+    options.cost.overlap_penalty = preset->overlap_penalty;
+    return options;
 }
 
 std::string describe_builder(const std::string& name) {
@@ -63,6 +101,11 @@ void BuildOptions::validate() const {
         throw Error("max leaf size must be in [1, 1048576], got " + std::to_string(max_leaf_size));
     if (max_depth < 1 || max_depth > 1024)
         throw Error("max depth must be in [1, 1024], got " + std::to_string(max_depth));
+    if (spatial_bins < 2 || spatial_bins > 1024)
+        throw Error("spatial bins must be in [2, 1024], got " + std::to_string(spatial_bins));
+    if (!(reference_budget >= 1.0f && reference_budget <= 4.0f))
+        throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
+                    std::to_string(reference_budget));
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
@@ -75,8 +118,22 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
         throw Error("scene '" + scene.name + "' has too many triangles (at most 2^31 - 1)");
     const BuilderPreset& preset = *find_preset(options.builder);
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
-                                  make_search_spaces(preset.search_spaces, options), options.progress);
-    Bvh bvh = builder.build(build::make_references(scene));
+                                  make_search_spaces(preset, scene, options), scene.triangles, options.progress);
+    // References: one per triangle, or the pre-split pieces (within the budget).
+    std::vector<build::Reference> references;
+    build::PresplitOptions presplit;
+    presplit.reference_budget = options.reference_budget;
+    switch (preset.presplit) {
+        case Presplit::none: references = build::make_references(scene); break;
+        case Presplit::early_split_clipping: references = build::early_split_clipping(scene, presplit); break;
+        case Presplit::edge_volume_heuristic: references = build::edge_volume_heuristic(scene, presplit); break;
+    }
+    // Spatial splits may grow the references up to the budget; object splits never do.
+    const bool splits_references = preset.search_spaces & uint32_t(SearchSpace::spatial_binned);
+    const size_t capacity = splits_references
+                                ? size_t(double(options.reference_budget) * double(scene.triangles.size()))
+                                : references.size();
+    Bvh bvh = builder.build(std::move(references), capacity);
     bvh.builder = options.builder;
     return bvh;
 }

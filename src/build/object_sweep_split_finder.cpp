@@ -7,8 +7,9 @@
 
 namespace spacebvh::build {
 
-Split ObjectSweepSplitFinder::find(std::span<Reference> references, const ReferenceSummary& node,
-                                   const CostModel& cost) const {
+Split ObjectSweepSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    const std::span<Reference> references = context.references;
+    const ReferenceSummary& node = context.summary;
     Split best;
     const size_t count = references.size();
     if (count < 2) return best;

@@ -9,7 +9,7 @@ namespace spacebvh::build {
 class ObjectSweepSplitFinder final : public SplitFinder {
 public:
     const char* name() const override { return "object-sweep"; }
-    Split find(std::span<Reference> references, const ReferenceSummary& node, const CostModel& cost) const override;
+    Split find(const NodeContext& node, const CostModel& cost) const override;
 };
 
 // Orders references by (centroid[axis], primitive): a total order, so sorting is deterministic.

@@ -1,8 +1,10 @@
 #include "build/partition.hpp"
 
 #include <algorithm>
+#include <vector>
 
 #include "build/object_sweep_split_finder.hpp"
+#include "build/spatial_split.hpp"
 
 namespace spacebvh::build {
 
@@ -14,16 +16,99 @@ bool goes_left(const Reference& reference, const Split& split) {
         }
         case SplitKind::object_binned:
             return split.binning.bin_of(reference.centroid(split.axis)) < split.bin;
+        case SplitKind::spatial:
+            return reference.bounds.hi[split.axis] <= split.position;
         case SplitKind::none:
             break;
     }
     return false;
 }
 
-size_t partition_references(std::span<Reference> references, const Split& split) {
-    auto middle = std::partition(references.begin(), references.end(),
+namespace {
+
+ChildRanges share_capacity(uint32_t capacity, uint32_t left_count, uint32_t right_count) {
+    const uint64_t spare = capacity - left_count - right_count;
+    const uint32_t left_extra = uint32_t(spare * left_count / (uint64_t(left_count) + right_count));
+    ChildRanges ranges;
+    ranges.left_count = left_count;
+    ranges.left_capacity = left_count + left_extra;
+    ranges.right_count = right_count;
+    ranges.right_capacity = capacity - ranges.left_capacity;
+    return ranges;
+}
+
+// Stich et al. 2009, "reference unsplitting": for a straddling reference B, compare
+//   both sides: SA(L)*|L| + SA(R)*|R|,  left only: SA(L ∪ B)*|L| + SA(R)*(|R|-1),
+//   right only: SA(L)*(|L|-1) + SA(R ∪ B)*|R|   (L, R, counts: the split's estimate).
+enum class Placement { both, left, right };
+Placement cheapest_placement(const Split& split, const AABB& whole) {
+    const float left_area = split.left_bounds.area(), right_area = split.right_bounds.area();
+    const float nl = float(split.left_count), nr = float(split.right_count);
+    const float both = left_area * nl + right_area * nr;
+    const float left_only = merge(split.left_bounds, whole).area() * nl + right_area * (nr - 1.0f);
+    const float right_only = left_area * (nl - 1.0f) + merge(split.right_bounds, whole).area() * nr;
+    if (both <= left_only && both <= right_only) return Placement::both;
+    return left_only <= right_only ? Placement::left : Placement::right;
+}
+
+ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, const Split& split,
+                                std::span<const Triangle> triangles) {
+    std::vector<Reference> left, right;
+    left.reserve(split.left_count);
+    right.reserve(split.right_count);
+    // Every reference clipped into both sides costs one more slot of this subtree's capacity.
+    size_t duplicates_left = storage.size() - count;
+    for (uint32_t i = 0; i < count; ++i) {
+        const Reference& reference = storage[i];
+        const float lo = reference.bounds.lo[split.axis], hi = reference.bounds.hi[split.axis];
+        if (hi <= split.position && lo < split.position) {
+            left.push_back(reference);
+        } else if (lo >= split.position && hi > split.position) {
+            right.push_back(reference);
+        } else if (lo == hi) {
+            left.push_back(reference);  // flat in the plane itself: one side is enough
+        } else {
+            Placement placement = split.unsplit ? cheapest_placement(split, reference.bounds) : Placement::both;
+            if (placement == Placement::both && duplicates_left == 0)
+                placement = cheapest_placement(split, reference.bounds) == Placement::right ? Placement::right : Placement::left;
+            if (placement == Placement::both) {
+                auto [left_piece, right_piece] = split_reference(reference, triangles[reference.primitive], split.axis, split.position);
+                const bool has_left = !left_piece.bounds.is_empty(), has_right = !right_piece.bounds.is_empty();
+                if (has_left && has_right) {
+                    left.push_back(left_piece);
+                    right.push_back(right_piece);
+                    --duplicates_left;
+                } else if (has_left) {
+                    left.push_back(left_piece);
+                } else if (has_right) {
+                    right.push_back(right_piece);
+                } else {
+                    left.push_back(reference);  // clipping found nothing (rounding): keep it whole
+                }
+            } else {
+                (placement == Placement::left ? left : right).push_back(reference);
+            }
+        }
+    }
+    const ChildRanges ranges = share_capacity(uint32_t(storage.size()), uint32_t(left.size()), uint32_t(right.size()));
+    std::copy(left.begin(), left.end(), storage.begin());
+    std::copy(right.begin(), right.end(), storage.begin() + ranges.left_capacity);
+    return ranges;
+}
+
+}  // namespace
+
+ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Split& split,
+                        std::span<const Triangle> triangles) {
+    if (split.kind == SplitKind::spatial) return apply_spatial_split(storage, count, split, triangles);
+    auto middle = std::partition(storage.begin(), storage.begin() + count,
                                  [&](const Reference& reference) { return goes_left(reference, split); });
-    return size_t(middle - references.begin());
+    const uint32_t left_count = uint32_t(middle - storage.begin());
+    const ChildRanges ranges = share_capacity(uint32_t(storage.size()), left_count, count - left_count);
+    // The right block moves up to where the right child's capacity starts (never down).
+    std::move_backward(storage.begin() + left_count, storage.begin() + count,
+                       storage.begin() + ranges.left_capacity + ranges.right_count);
+    return ranges;
 }
 
 Split median_split(std::span<Reference> references, const ReferenceSummary& node) {

@@ -1,4 +1,5 @@
-// Applying a chosen split: moving each reference of a node to its child.
+// Applying a chosen split: moving each reference of a node to its child (and, for spatial splits,
+// clipping straddling references into both).
 #pragma once
 
 #include <span>
@@ -7,11 +8,20 @@
 
 namespace spacebvh::build {
 
-bool goes_left(const Reference& reference, const Split& split);
+// A node's references occupy storage[0, count); its subtree may use all of storage (its capacity).
+// After the split, the left child's references are storage[0, left_count) and the right child's
+// storage[left_capacity, left_capacity + right_count); each child may use its capacity. The spare
+// capacity (storage.size() - left_count - right_count) is shared in proportion to the counts.
+struct ChildRanges {
+    uint32_t left_count = 0, left_capacity = 0;
+    uint32_t right_count = 0, right_capacity = 0;
+};
 
-// Reorders the references so those going left come first; returns how many go left.
-// Deterministic (the same input order gives the same output order).
-size_t partition_references(std::span<Reference> references, const Split& split);
+// Deterministic: the same input order gives the same output order.
+ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Split& split,
+                        std::span<const Triangle> triangles);
+
+bool goes_left(const Reference& reference, const Split& split);  // object splits only
 
 // The fallback when a node must be split (too many references) but no search space offers a
 // feasible split: halve the node at the median of the centroid order on the widest axis.

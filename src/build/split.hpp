@@ -18,6 +18,10 @@ enum class SplitKind : uint8_t {
     // References whose centroid falls in a bin below `bin` go left (binned object SAH). The bin
     // function is ObjectBinning's, so the partition reproduces the finder's counts exactly.
     object_binned,
+    // A kd-style plane x[axis] = position: references entirely on one side go there, straddling
+    // references are clipped exactly and go to both sides (or, with unsplitting, to the cheaper one).
+    // Children never overlap.
+    spatial,
 };
 
 inline constexpr uint32_t kMaxObjectBins = 256;
@@ -46,8 +50,18 @@ struct Split {
     uint32_t bin = 0;                     // object_binned: first bin of the right child
     AABB left_bounds, right_bounds;       // boxes of the children this split makes
     uint32_t left_count = 0, right_count = 0;
+    bool unsplit = false;                 // spatial: try reference unsplitting when applying
 
     bool is_valid() const { return kind != SplitKind::none && cost < kInfinity; }
+};
+
+// What a search space sees of a node.
+struct NodeContext {
+    std::span<Reference> references;
+    const ReferenceSummary& summary;
+    size_t capacity;   // references this node's subtree may hold (its share of the reference budget)
+    float root_area;   // SA(root), for gates relative to the scene
+    const Split& best_so_far;  // the cheapest split of the search spaces evaluated before this one
 };
 
 // A search space: finds the lowest-cost configuration of its kind for a node. Finders may reorder
@@ -57,8 +71,7 @@ class SplitFinder {
 public:
     virtual ~SplitFinder() = default;
     virtual const char* name() const = 0;
-    virtual Split find(std::span<Reference> references, const ReferenceSummary& node,
-                       const CostModel& cost) const = 0;
+    virtual Split find(const NodeContext& node, const CostModel& cost) const = 0;
 };
 
 }  // namespace spacebvh::build

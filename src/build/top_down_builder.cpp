@@ -2,17 +2,20 @@
 
 #include <tbb/parallel_invoke.h>
 
+#include <algorithm>
 #include <atomic>
 
 #include "build/partition.hpp"
 
 namespace spacebvh::build {
 
-// Determinism: a subtree over n references has at most 2n-1 nodes, so it is given the node slots
-// [s, s + 2n - 1): its root takes s, its left child (n_L references) takes s + 1 onwards, and its right
-// child s + 2*n_L onwards. Every node's slot is a function of the splits alone, so the tasks of a
-// parallel build can write their nodes without coordination and the result is the same for any
-// thread count. A final depth-first pass drops the unused slots and places siblings side by side.
+// Determinism: a subtree whose references may grow to `capacity` (its share of the reference
+// budget; the count itself without spatial splits) has at most 2*capacity - 1 nodes, so it is given
+// the node slots [s, s + 2*capacity - 1) and the reference storage [b, b + capacity): its root takes
+// slot s, its left child (capacity c_L) slots from s + 1 and storage from b, its right child slots from
+// s + 2*c_L and storage from b + c_L. Every node's place is a function of the splits alone, so the
+// tasks of a parallel build write without coordination and the result is the same for any thread
+// count. A final depth-first pass drops unused slots and places siblings side by side.
 struct TopDownBuilder::Impl {
     struct SlotNode {
         AABB bounds;
@@ -22,7 +25,9 @@ struct TopDownBuilder::Impl {
     };
 
     const TopDownBuilder& builder;
-    std::vector<Reference> references;
+    std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
+    size_t input_count = 0;
+    float root_area = 0;
     std::vector<SlotNode> slots;
     std::atomic<size_t> references_in_leaves{0};
     std::atomic<size_t> next_progress_report{0};
@@ -33,51 +38,58 @@ struct TopDownBuilder::Impl {
         node.is_leaf = true;
         if (!builder.progress_) return;
         const size_t done = references_in_leaves.fetch_add(node.count) + node.count;
-        const size_t step = references.size() / 100 + 1;
+        const size_t step = input_count / 100 + 1;
         size_t next = next_progress_report.load();
         if (done >= next && next_progress_report.compare_exchange_strong(next, done + step))
-            builder.progress_(double(done) / double(references.size()));
+            builder.progress_(std::min(1.0, double(done) / double(input_count)));
     }
 
-    Split choose_split(std::span<Reference> node_references, const ReferenceSummary& summary) const {
+    Split choose_split(std::span<Reference> node_references, const ReferenceSummary& summary, size_t capacity) const {
         Split best;
         for (const auto& search_space : builder.search_spaces_) {
-            Split candidate = search_space->find(node_references, summary, builder.cost_);
+            const NodeContext context{node_references, summary, capacity, root_area, best};
+            Split candidate = search_space->find(context, builder.cost_);
             if (candidate.cost < best.cost) best = candidate;
         }
         return best;
     }
 
-    void build_subtree(uint32_t slot, uint32_t begin, uint32_t end, const ReferenceSummary& summary, uint32_t depth) {
+    void build_subtree(uint32_t slot, uint32_t begin, uint32_t count, uint32_t capacity, const ReferenceSummary& summary,
+                       uint32_t depth) {
         SlotNode& node = slots[slot];
         node.bounds = summary.bounds;
         node.begin = begin;
-        node.count = end - begin;
-        const uint32_t count = node.count;
+        node.count = count;
         if (count <= 1 || depth >= builder.limits_.max_depth) return make_leaf(node);
 
-        std::span<Reference> node_references(references.data() + begin, count);
-        Split split = choose_split(node_references, summary);
+        std::span<Reference> storage(references.data() + begin, capacity);
+        std::span<Reference> node_references = storage.first(count);
+        Split split = choose_split(node_references, summary, capacity);
         const bool must_split = count > builder.limits_.max_leaf_size;
         const bool split_pays = split.is_valid() && split.cost < builder.cost_.leaf_cost(count);
         if (!must_split && !split_pays) return make_leaf(node);
         if (!split.is_valid()) split = median_split(node_references, summary);
 
-        uint32_t left_count = uint32_t(partition_references(node_references, split));
-        if (left_count == 0 || left_count == count) {
+        ChildRanges children = apply_split(storage, count, split, builder.triangles_);
+        if (children.left_count == 0 || children.right_count == 0) {
             // Cannot happen for the finders' own splits; guard against float surprises anyway.
             split = median_split(node_references, summary);
-            left_count = uint32_t(partition_references(node_references, split));
-            if (left_count == 0 || left_count == count) return make_leaf(node);
+            children = apply_split(storage, count, split, builder.triangles_);
+            if (children.left_count == 0 || children.right_count == 0) return make_leaf(node);
         }
-        const uint32_t middle = begin + left_count;
-        const ReferenceSummary left_summary = summarize({references.data() + begin, left_count});
-        const ReferenceSummary right_summary = summarize({references.data() + middle, end - middle});
+        const uint32_t right_begin = begin + children.left_capacity;
+        const ReferenceSummary left_summary = summarize({references.data() + begin, children.left_count});
+        const ReferenceSummary right_summary = summarize({references.data() + right_begin, children.right_count});
         node.left_slot = slot + 1;
-        node.right_slot = slot + 2 * left_count;
+        node.right_slot = slot + 2 * children.left_capacity;
 
-        auto build_left = [&] { build_subtree(slot + 1, begin, middle, left_summary, depth + 1); };
-        auto build_right = [&] { build_subtree(slot + 2 * left_count, middle, end, right_summary, depth + 1); };
+        auto build_left = [&] {
+            build_subtree(slot + 1, begin, children.left_count, children.left_capacity, left_summary, depth + 1);
+        };
+        auto build_right = [&] {
+            build_subtree(node.right_slot, right_begin, children.right_count, children.right_capacity, right_summary,
+                          depth + 1);
+        };
         if (count >= kParallelSubtreeThreshold) {
             tbb::parallel_invoke(build_left, build_right);
         } else {
@@ -86,16 +98,20 @@ struct TopDownBuilder::Impl {
         }
     }
 
-    // Depth-first, left first; the two children of a node are stored next to each other.
+    // Depth-first, left first; the two children of a node are stored next to each other. A leaf
+    // lists each triangle once, in increasing id (pre-split references of one triangle may meet).
     void emit(uint32_t slot, uint32_t out_index, Bvh& bvh) const {
         const SlotNode& node = slots[slot];
         BvhNode& out = bvh.nodes[out_index];
         out.bounds = node.bounds;
         if (node.is_leaf) {
-            out.first = uint32_t(bvh.primitives.size());
-            out.reference_count = node.count;
+            const size_t first = bvh.primitives.size();
             for (uint32_t i = node.begin; i < node.begin + node.count; ++i)
                 bvh.primitives.push_back(references[i].primitive);
+            std::sort(bvh.primitives.begin() + first, bvh.primitives.end());
+            bvh.primitives.erase(std::unique(bvh.primitives.begin() + first, bvh.primitives.end()), bvh.primitives.end());
+            out.first = uint32_t(first);
+            out.reference_count = uint32_t(bvh.primitives.size() - first);
             return;
         }
         const uint32_t first_child = uint32_t(bvh.nodes.size());
@@ -109,23 +125,31 @@ struct TopDownBuilder::Impl {
 
 TopDownBuilder::TopDownBuilder(CostModel cost, BuildLimits limits,
                                std::vector<std::unique_ptr<SplitFinder>> search_spaces,
-                               std::function<void(double)> progress)
-    : cost_(cost), limits_(limits), search_spaces_(std::move(search_spaces)), progress_(std::move(progress)) {}
+                               std::span<const Triangle> triangles, std::function<void(double)> progress)
+    : cost_(cost),
+      limits_(limits),
+      search_spaces_(std::move(search_spaces)),
+      triangles_(triangles),
+      progress_(std::move(progress)) {}
 
 TopDownBuilder::~TopDownBuilder() = default;
 
-Bvh TopDownBuilder::build(std::vector<Reference> references) {
-    Impl impl{*this, std::move(references), {}};
+Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
+    Impl impl{*this, std::move(references)};
     const size_t count = impl.references.size();
     Bvh bvh;
     bvh.cost = cost_;
     if (count == 0) return bvh;
-    impl.slots.resize(2 * count - 1);
-    const ReferenceSummary root = summarize(impl.references);
-    impl.build_subtree(0, 0, uint32_t(count), root, 0);
+    capacity = std::max(capacity, count);
+    impl.input_count = count;
+    impl.references.resize(capacity);
+    impl.slots.resize(2 * capacity - 1);
+    const ReferenceSummary root = summarize({impl.references.data(), count});
+    impl.root_area = root.bounds.area();
+    impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);
 
-    bvh.nodes.reserve(2 * count - 1);
-    bvh.primitives.reserve(count);
+    bvh.nodes.reserve(2 * capacity - 1);
+    bvh.primitives.reserve(capacity);
     bvh.nodes.resize(1);
     impl.emit(0, 0, bvh);
     bvh.nodes.shrink_to_fit();

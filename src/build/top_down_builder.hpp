@@ -21,18 +21,20 @@ struct BuildLimits {
 class TopDownBuilder {
 public:
     TopDownBuilder(CostModel cost, BuildLimits limits, std::vector<std::unique_ptr<SplitFinder>> search_spaces,
-                   std::function<void(double)> progress = {});
+                   std::span<const Triangle> triangles, std::function<void(double)> progress = {});
     ~TopDownBuilder();
 
-    // Builds over the references (consumed). Parallel over subtrees with oneTBB; the tree depends
-    // only on the input, never on scheduling (see the slot numbering in the .cpp).
-    Bvh build(std::vector<Reference> references);
+    // Builds over the references (consumed). `capacity` (>= references.size()) is the reference
+    // budget: how many references spatial splits may grow the set to. Parallel over subtrees with
+    // oneTBB; the tree depends only on the input, never on scheduling (see the slot numbering).
+    Bvh build(std::vector<Reference> references, size_t capacity);
 
 private:
     struct Impl;
     CostModel cost_;
     BuildLimits limits_;
     std::vector<std::unique_ptr<SplitFinder>> search_spaces_;
+    std::span<const Triangle> triangles_;
     std::function<void(double)> progress_;
 };
 

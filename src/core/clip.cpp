@@ -182,6 +182,37 @@ AABB clip_triangle_bounds(const Triangle& triangle, const AABB& box) {
     return bounds_of(polygon, limit);
 }
 
+namespace {
+
+// The part of the triangle inside `current_bounds` (a reference's bounds) as a polygon; false when
+// there is none.
+bool piece_within(const Triangle& triangle, const AABB& triangle_box, const AABB& current_bounds, Polygon& piece) {
+    piece = polygon_of(triangle);
+    clip_to_box(piece, triangle_box, current_bounds);
+    if (piece.count > 0) return true;
+    // current_bounds came from an earlier clip, so the triangle does meet it; it can still be
+    // lost here when the piece is a single touching point or edge that rounding moves just
+    // outside a flat box. Retry with the box widened by a few ulps so the reference does not
+    // vanish from both sides (bounds_of clamps the result back into current_bounds).
+    // The rounding of interpolated points scales with the largest coordinate involved.
+    double scale = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        scale = std::max({scale, std::abs(double(triangle_box.lo[k])), std::abs(double(triangle_box.hi[k])),
+                          std::abs(double(current_bounds.lo[k])), std::abs(double(current_bounds.hi[k]))});
+    }
+    double widen = 16.0 * double(std::numeric_limits<float>::epsilon()) * scale + 1e-30;
+    std::array<double, 3> lo, hi;
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = double(current_bounds.lo[k]) - widen;
+        hi[k] = double(current_bounds.hi[k]) + widen;
+    }
+    piece = polygon_of(triangle);
+    clip_to_box(piece, triangle_box, lo, hi);
+    return piece.count > 0;
+}
+
+}  // namespace
+
 SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis, float position) {
     SplitBounds result{AABB::empty(), AABB::empty()};
     AABB triangle_box = triangle.bounds();
@@ -190,29 +221,8 @@ SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_
     AABB limit = intersect(triangle_box, current_bounds);
     if (limit.is_empty()) return result;
 
-    Polygon piece = polygon_of(triangle);
-    clip_to_box(piece, triangle_box, current_bounds);
-    if (piece.count == 0) {
-        // current_bounds came from an earlier clip, so the triangle does meet it; it can still be
-        // lost here when the piece is a single touching point or edge that rounding moves just
-        // outside a flat box. Retry with the box widened by a few ulps so the reference does not
-        // vanish from both sides (bounds_of clamps the result back into current_bounds).
-        // The rounding of interpolated points scales with the largest coordinate involved.
-        double scale = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            scale = std::max({scale, std::abs(double(triangle_box.lo[k])), std::abs(double(triangle_box.hi[k])),
-                              std::abs(double(current_bounds.lo[k])), std::abs(double(current_bounds.hi[k]))});
-        }
-        double widen = 16.0 * double(std::numeric_limits<float>::epsilon()) * scale + 1e-30;
-        std::array<double, 3> lo, hi;
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = double(current_bounds.lo[k]) - widen;
-            hi[k] = double(current_bounds.hi[k]) + widen;
-        }
-        piece = polygon_of(triangle);
-        clip_to_box(piece, triangle_box, lo, hi);
-        if (piece.count == 0) return result;
-    }
+    Polygon piece;
+    if (!piece_within(triangle, triangle_box, current_bounds, piece)) return result;
     AABB left_limit = limit, right_limit = limit;
     left_limit.hi[axis] = std::min(left_limit.hi[axis], position);
     right_limit.lo[axis] = std::max(right_limit.lo[axis], position);
@@ -223,6 +233,37 @@ SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_
     clip_half_space(piece, side, axis, double(position), false);
     if (!right_limit.is_empty()) result.right = side.overflow ? right_limit : bounds_of(side, right_limit);
     return result;
+}
+
+void chop_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis,
+                          std::span<const float> planes, std::span<AABB> pieces) {
+    std::fill(pieces.begin(), pieces.end(), AABB::empty());
+    const AABB triangle_box = triangle.bounds();
+    if (current_bounds.is_empty() || !boxes_overlap(triangle_box, current_bounds)) return;
+    const AABB limit = intersect(triangle_box, current_bounds);
+    if (limit.is_empty()) return;
+    // Clip once to the reference's bounds, then peel one slab off per plane: the same operations
+    // as split_triangle_bounds applied plane by plane, without re-clipping the triangle each time.
+    Polygon buffers[3];
+    Polygon* rest = &buffers[0];
+    Polygon* next = &buffers[1];
+    Polygon& slab = buffers[2];
+    if (!piece_within(triangle, triangle_box, current_bounds, *rest)) return;
+    float low = -kInfinity;
+    for (size_t i = 0; i < planes.size(); ++i) {
+        AABB slab_limit = limit;
+        slab_limit.lo[axis] = std::max(slab_limit.lo[axis], low);
+        slab_limit.hi[axis] = std::min(slab_limit.hi[axis], planes[i]);
+        clip_half_space(*rest, slab, axis, double(planes[i]), true);
+        if (!slab_limit.is_empty() && slab.count > 0) pieces[i] = slab.overflow ? slab_limit : bounds_of(slab, slab_limit);
+        clip_half_space(*rest, *next, axis, double(planes[i]), false);
+        std::swap(rest, next);
+        low = planes[i];
+        if (rest->count == 0) return;
+    }
+    AABB last_limit = limit;
+    last_limit.lo[axis] = std::max(last_limit.lo[axis], low);
+    if (!last_limit.is_empty()) pieces[planes.size()] = rest->overflow ? last_limit : bounds_of(*rest, last_limit);
 }
 
 double clipped_triangle_area(const Triangle& triangle, const AABB& box) {

@@ -33,7 +33,8 @@ struct BinaryTracer::Layout {
 
 namespace {
 
-constexpr int kStackSize = 128;
+// A push happens at most once per level, and build options cap the depth at 1024.
+constexpr int kStackSize = 1024 + 8;
 // Conservative box test (Ize 2013; pbrt-v4 gamma(3)): widen the far distance by the worst rounding of
 // the slab computation so rounding never culls a box the ray really touches.
 constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);

@@ -1,0 +1,136 @@
+#include "build/binned_spatial_split_finder.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "spacebvh/clip.hpp"
+
+namespace spacebvh::build {
+namespace {
+
+// Bins along one axis of the node box: plane i (between bins i-1 and i) is at origin + i * width.
+struct SpatialBinning {
+    int axis;
+    float origin, width, inverse_width;
+    uint32_t bins;
+
+    uint32_t bin_of(float x) const {
+        const float position = (x - origin) * inverse_width;
+        return uint32_t(std::min(std::max(position, 0.0f), float(bins - 1)));
+    }
+    float plane(uint32_t i) const { return i == bins ? origin + width * float(bins) : origin + width * float(i); }
+};
+
+// Clipped boxes and enter/exit counts per bin. Merging is exact (min/max, integer sums), so a
+// parallel reduction gives the same bins whatever the thread count.
+struct SpatialBins {
+    std::vector<AABB> bounds;
+    std::vector<uint32_t> enter, exit;
+    std::vector<float> planes;  // scratch for chopping
+    std::vector<AABB> pieces;
+
+    explicit SpatialBins(uint32_t bins) : bounds(bins), enter(bins, 0), exit(bins, 0) {}
+
+    void add(std::span<const Reference> references, std::span<const Triangle> triangles, const SpatialBinning& binning) {
+        const int axis = binning.axis;
+        for (const Reference& reference : references) {
+            const uint32_t first = binning.bin_of(reference.bounds.lo[axis]);
+            const uint32_t last = std::max(first, binning.bin_of(reference.bounds.hi[axis]));
+            enter[first]++;
+            exit[last]++;
+            if (first == last) {
+                bounds[first].extend(reference.bounds);
+                continue;
+            }
+            // Chop the reference into the bins it spans (one exact clip, one slab per plane).
+            const uint32_t spanned = last - first + 1;
+            planes.resize(spanned - 1);
+            pieces.resize(spanned);
+            for (uint32_t i = 0; i + 1 < spanned; ++i) planes[i] = binning.plane(first + i + 1);
+            chop_triangle_bounds(triangles[reference.primitive], reference.bounds, axis, planes, pieces);
+            for (uint32_t i = 0; i < spanned; ++i) bounds[first + i].extend(pieces[i]);
+        }
+    }
+    void merge(const SpatialBins& other) {
+        for (size_t i = 0; i < bounds.size(); ++i) {
+            bounds[i].extend(other.bounds[i]);
+            enter[i] += other.enter[i];
+            exit[i] += other.exit[i];
+        }
+    }
+};
+
+}  // namespace
+
+Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    Split best;
+    const std::span<Reference> references = context.references;
+    if (references.size() < 2) return best;
+    if (options_.gate_alpha > 0.0f && context.best_so_far.is_valid()) {
+        const AABB overlap = intersect(context.best_so_far.left_bounds, context.best_so_far.right_bounds);
+        if (overlap.is_empty() || overlap.area() < options_.gate_alpha * context.root_area) return best;
+    }
+    const AABB& node = context.summary.bounds;
+    const uint32_t bins = options_.bins;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float extent = node.hi[axis] - node.lo[axis];
+        if (!(extent > 0.0f)) continue;
+        SpatialBinning binning{axis, node.lo[axis], extent / float(bins), float(bins) / extent, bins};
+
+        SpatialBins grid(bins);
+        constexpr size_t kParallelThreshold = 8 * 1024;
+        if (references.size() < kParallelThreshold) {
+            grid.add(references, triangles_, binning);
+        } else {
+            grid = tbb::parallel_reduce(
+                tbb::blocked_range<size_t>(0, references.size(), 2048), SpatialBins(bins),
+                [&](const tbb::blocked_range<size_t>& range, SpatialBins partial) {
+                    partial.add(references.subspan(range.begin(), range.size()), triangles_, binning);
+                    return partial;
+                },
+                [](SpatialBins a, const SpatialBins& b) {
+                    a.merge(b);
+                    return a;
+                });
+        }
+
+        std::vector<AABB> suffix_bounds(bins);
+        std::vector<uint32_t> suffix_counts(bins);
+        AABB right;
+        uint32_t right_count = 0;
+        for (uint32_t i = bins; i-- > 1;) {
+            right.extend(grid.bounds[i]);
+            right_count += grid.exit[i];
+            suffix_bounds[i] = right;
+            suffix_counts[i] = right_count;
+        }
+        AABB left;
+        uint32_t left_count = 0;
+        for (uint32_t i = 1; i < bins; ++i) {
+            left.extend(grid.bounds[i - 1]);
+            left_count += grid.enter[i - 1];
+            const uint32_t count_right = suffix_counts[i];
+            if (left_count == 0 || count_right == 0) continue;
+            // Over this subtree's budget the plane is still a candidate: apply_split then sends the
+            // straddlers it cannot duplicate whole to their cheaper side (the budget always holds).
+            const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
+            if (split_cost < best.cost) {
+                best.kind = SplitKind::spatial;
+                best.cost = split_cost;
+                best.axis = axis;
+                best.position = binning.plane(i);
+                best.left_bounds = left;
+                best.right_bounds = suffix_bounds[i];
+                best.left_count = left_count;
+                best.right_count = count_right;
+                best.unsplit = options_.unsplit;
+            }
+        }
+    }
+    return best;
+}
+
+}  // namespace spacebvh::build
