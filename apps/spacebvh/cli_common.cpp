@@ -8,9 +8,17 @@
 #include <cstdio>
 #include <fstream>
 
+#include "embree/embree_builder.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::cli {
+namespace {
+bool builder_names_contains(const std::string& name) {
+    for (const auto& known : builder_names())
+        if (known == name) return true;
+    return false;
+}
+}  // namespace
 
 void SceneOptions::add_to(CLI::App& command) {
     command.add_option("--rotate", rotate, "rotate every vertex at load time, degrees: x:45,y:45,z:45 (R = Rz*Ry*Rx)");
@@ -44,9 +52,7 @@ float parse_float_or_inf(const std::string& text, const char* what) {
 
 void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     if (with_builder) {
-        std::string names;
-        for (const auto& name : builder_names()) names += (names.empty() ? "" : ", ") + name;
-        command.add_option("--builder,-b", builder, "builder: " + names)->capture_default_str();
+        command.add_option("--builder,-b", builder, "builder: " + builder_list())->capture_default_str();
     }
     command.add_option("--ct", traversal_cost, "C_T, cost of a traversal step")->capture_default_str();
     command.add_option("--ci", intersection_cost, "C_I, cost of a triangle test")->capture_default_str();
@@ -63,7 +69,8 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
 }
 
 BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
-    BuildOptions options = options_for(builder_name);
+    // Embree's trees take the same limits and costs; their name is not one of our presets.
+    BuildOptions options = options_for(is_embree_tree(builder_name) ? "binned" : builder_name);
     options.cost.traversal_cost = traversal_cost;
     options.cost.intersection_cost = intersection_cost;
     if (!overlap_penalty.empty()) options.cost.overlap_penalty = parse_float_or_inf(overlap_penalty, "--co");
@@ -74,6 +81,7 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
     options.reference_budget = reference_budget;
     options.unsplitting = !no_unsplitting;
     options.validate();
+    options.builder = builder_name;
     return options;
 }
 
@@ -131,6 +139,21 @@ void Progress::update(double fraction) {
 std::function<void(double)> Progress::callback() {
     if (!enabled_) return {};
     return [this](double fraction) { update(fraction); };
+}
+
+bool is_embree_tree(const std::string& builder) { return builder == "embree-medium" || builder == "embree-high"; }
+
+Bvh build_tree(const Scene& scene, const BuildOptions& options) {
+    if (builder_names_contains(options.builder)) return build_bvh(scene, options);
+    if (options.builder == "embree-medium") return build_bvh_with_embree(scene, EmbreeQuality::medium, options);
+    if (options.builder == "embree-high") return build_bvh_with_embree(scene, EmbreeQuality::high, options);
+    return build_bvh(scene, options);  // reports the unknown name
+}
+
+std::string builder_list() {
+    std::string names;
+    for (const auto& name : builder_names()) names += name + ", ";
+    return names + "embree-medium, embree-high (Embree 3's own binary trees under our kernel)";
 }
 
 double milliseconds_since(std::chrono::steady_clock::time_point start) {

@@ -74,6 +74,12 @@ private:
     bool drawn_ = false;
 };
 
+// Our builders, plus Embree's own binary trees imported through rtcBuildBVH ("embree-medium",
+// "embree-high"), so Embree's tree quality can be measured under our kernel.
+bool is_embree_tree(const std::string& builder);
+Bvh build_tree(const Scene& scene, const BuildOptions& options);
+std::string builder_list();  // for --help
+
 double milliseconds_since(std::chrono::steady_clock::time_point start);
 double median(std::vector<double> values);
 void write_json(const std::string& path, const nlohmann::json& json);

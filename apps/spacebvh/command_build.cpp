@@ -29,7 +29,7 @@ void add_build_command(CLI::App& app) {
         Progress progress("building", !options->common.quiet);
         build_options.progress = progress.callback();
         const auto start = std::chrono::steady_clock::now();
-        const Bvh bvh = build_bvh(scene, build_options);
+        const Bvh bvh = build_tree(scene, build_options);
         const double build_ms = milliseconds_since(start);
         const TreeStats stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
         const BinaryTracer tracer(scene, bvh);

@@ -27,6 +27,7 @@ struct Row {
     std::string name;
     double build_ms = 0;
     std::optional<TreeStats> stats;
+    std::optional<CostModel> cost;
     KindResult kinds[3];
 };
 
@@ -69,6 +70,30 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
+// "NAME" or "NAME@co=0.3,budget=1.5,bins=64": a builder with some options of its own.
+struct BuilderSpec {
+    std::string label;
+    BuildOptions options;
+};
+
+BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& defaults) {
+    const size_t at = text.find('@');
+    BuilderSpec spec{text, defaults.options(text.substr(0, at))};
+    if (at != std::string::npos) {
+        for (const std::string& setting : CLI::detail::split(text.substr(at + 1), ';')) {
+            const size_t equals = setting.find('=');
+            if (equals == std::string::npos) throw Error("builder '" + text + "': expected key=value after '@'");
+            const std::string key = setting.substr(0, equals), value = setting.substr(equals + 1);
+            if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
+            else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
+            else if (key == "bins") spec.options.spatial_bins = uint32_t(parse_float_or_inf(value, "bins"));
+            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins)");
+        }
+        spec.options.validate();
+    }
+    return spec;
+}
+
 std::string number_or_dash(std::optional<double> value, int precision) {
     if (!value) return "-";
     std::ostringstream text;
@@ -98,7 +123,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();
@@ -120,9 +145,9 @@ void add_compare_command(CLI::App& app) {
         if (options->build_runs < 1 || options->build_runs > 1000) throw Error("--build-runs must be in [1, 1000]");
         if (options->random_count == 0 || options->random_count > (size_t(1) << 31))
             throw Error("--random must be in [1, 2^31]");
-        std::vector<std::string> builders;
+        std::vector<BuilderSpec> builders;
         for (const auto& name : CLI::detail::split(options->builders, ','))
-            if (!name.empty()) builders.push_back(options->build.options(name).builder);  // validates each
+            if (!name.empty()) builders.push_back(parse_builder_spec(name, options->build));  // validates each
         if (builders.empty()) throw Error("--builders names no builder");
         std::vector<EmbreeQuality> embree_rows;
         if (options->embree != "none")
@@ -134,11 +159,12 @@ void add_compare_command(CLI::App& app) {
             for (const auto& name : builtin_scene_names()) sources.push_back("builtin:" + name);
 
         const SceneTransform transform = options->scene.transform();
-        const CostModel cost = options->build.options(builders.front()).cost;
+        const CostModel cost = builders.front().options.cost;
         nlohmann::json json_scenes = nlohmann::json::array();
-        std::printf("# spacebvh compare: %u threads, %s, max leaf %u; Mrays/s = median of %d runs; ratios to %s\n\n",
-                    options->common.effective_threads(), cost.describe().c_str(), options->build.max_leaf_size,
-                    options->runs, builders.front().c_str());
+        std::printf("# spacebvh compare: %u threads, C_T=%g C_I=%g (C_o per row), max leaf %u; Mrays/s = median of %d "
+                    "runs; ratios to %s\n\n",
+                    options->common.effective_threads(), cost.traversal_cost, cost.intersection_cost,
+                    options->build.max_leaf_size, options->runs, builders.front().label.c_str());
 
         for (const std::string& source : sources) {
             const Scene scene = load_scene(source, transform);
@@ -158,13 +184,14 @@ void add_compare_command(CLI::App& app) {
 
             for (size_t b = 0; b < builders.size(); ++b) {
                 Row row;
-                row.name = builders[b];
-                const BuildOptions build_options = options->build.options(builders[b]);
+                const BuildOptions& build_options = builders[b].options;
+                row.name = builders[b].label + " (C_o=" + number_or_dash(build_options.cost.overlap_penalty, 2) + ")";
+                row.cost = build_options.cost;
                 std::vector<double> build_ms;
                 Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
                     const auto start = std::chrono::steady_clock::now();
-                    bvh = build_bvh(scene, build_options);
+                    bvh = build_tree(scene, build_options);
                     build_ms.push_back(milliseconds_since(start));
                 }
                 row.build_ms = median(build_ms);
@@ -188,7 +215,7 @@ void add_compare_command(CLI::App& app) {
             }
             for (size_t e = 0; e < embree_rows.size(); ++e) {
                 Row row;
-                row.name = std::string("embree-") + to_string(embree_rows[e]);
+                row.name = std::string("embree-") + to_string(embree_rows[e]) + " (own kernel)";
                 std::vector<double> build_ms;
                 std::optional<EmbreeScene> embree;
                 for (int run = 0; run < options->build_runs; ++run) {
@@ -242,6 +269,7 @@ void add_compare_command(CLI::App& app) {
                             number_or_dash(ours ? std::optional(row.stats->sah) : std::nullopt, 2).c_str(),
                             number_or_dash(ours && !options->no_epo ? std::optional(row.stats->epo) : std::nullopt, 2).c_str());
                 nlohmann::json json_row = {{"builder", row.name}, {"build_ms", row.build_ms}};
+                if (row.cost) json_row["cost"] = row.cost->describe();
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
                     json_row["references"] = row.stats->references;
@@ -279,7 +307,8 @@ void add_compare_command(CLI::App& app) {
                                    {"rows", json_rows}});
         }
         write_json(options->common.json_path, {{"threads", options->common.effective_threads()},
-                                               {"cost", cost.describe()},
+                                               {"C_T", cost.traversal_cost},
+                                               {"C_I", cost.intersection_cost},
                                                {"runs", options->runs},
                                                {"scenes", json_scenes}});
     });

@@ -33,7 +33,7 @@ void add_render_command(CLI::App& app) {
         const Scene scene = load_scene(options->source, transform);
         const Camera camera = options->camera.camera_for(scene, options->source, transform);
         const BuildOptions build_options = options->build.options(options->build.builder);
-        const Bvh bvh = build_bvh(scene, build_options);
+        const Bvh bvh = build_tree(scene, build_options);
         const BinaryTracer tracer(scene, bvh);
         const uint32_t width = options->camera.width, height = options->camera.height;
         if (!options->heatmap) {

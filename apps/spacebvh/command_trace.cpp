@@ -30,7 +30,7 @@ void add_trace_command(CLI::App& app) {
         const Scene scene = load_scene(options->source, options->scene.transform());
         const std::vector<Ray> rays = read_ray_file(options->rays_path);
         const BuildOptions build_options = options->build.options(options->build.builder);
-        const Bvh bvh = build_bvh(scene, build_options);
+        const Bvh bvh = build_tree(scene, build_options);
         const BinaryTracer tracer(scene, bvh);
         TraversalStats stats;
         TraversalStats* stats_out = options->stats ? &stats : nullptr;
