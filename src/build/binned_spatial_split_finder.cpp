@@ -37,8 +37,14 @@ struct SpatialBins {
     void add(std::span<const Reference> references, std::span<const Triangle> triangles, const SpatialBinning& binning) {
         const int axis = binning.axis;
         for (const Reference& reference : references) {
-            const uint32_t first = binning.bin_of(reference.bounds.lo[axis]);
-            const uint32_t last = std::max(first, binning.bin_of(reference.bounds.hi[axis]));
+            // Bins from the plane positions themselves, so a bin's box never crosses its planes
+            // (bin_of's rounding alone could leave a box a hair past a plane, which would make the
+            // children look overlapping and, with C_o = inf, every plane infeasible).
+            const float lo = reference.bounds.lo[axis], hi = reference.bounds.hi[axis];
+            uint32_t first = binning.bin_of(lo);
+            while (first > 0 && binning.plane(first) > lo) --first;
+            uint32_t last = std::max(first, binning.bin_of(hi));
+            while (last + 1 < binning.bins && binning.plane(last + 1) < hi) ++last;
             enter[first]++;
             exit[last]++;
             if (first == last) {
