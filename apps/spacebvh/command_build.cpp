@@ -1,4 +1,5 @@
 // spacebvh build SCENE --builder NAME: build one tree and print its quality metrics.
+#include <cmath>
 #include <cstdio>
 
 #include "cli_common.hpp"
@@ -53,7 +54,9 @@ void add_build_command(CLI::App& app) {
                                {"threads", options->common.effective_threads()},
                                {"cost", {{"C_T", build_options.cost.traversal_cost},
                                          {"C_I", build_options.cost.intersection_cost},
-                                         {"C_o", build_options.cost.describe()}}},
+                                         {"C_o", std::isinf(build_options.cost.overlap_penalty)
+                                                     ? nlohmann::json("inf")
+                                                     : nlohmann::json(build_options.cost.overlap_penalty)}}},
                                {"build_ms", build_ms},
                                {"nodes", stats.nodes},
                                {"leaves", stats.leaves},

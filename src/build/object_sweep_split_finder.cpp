@@ -36,8 +36,7 @@ Split ObjectSweepSplitFinder::find(const NodeContext& context, const CostModel& 
                 best.kind = SplitKind::object_sorted;
                 best.cost = split_cost;
                 best.axis = axis;
-                best.position = references[i].centroid(axis);
-                best.tie_primitive = references[i].primitive;
+                best.tie = references[i];
                 best.left_bounds = left;
                 best.right_bounds = suffix_bounds[i];
                 best.left_count = uint32_t(i);

@@ -12,12 +12,20 @@ public:
     Split find(const NodeContext& node, const CostModel& cost) const override;
 };
 
-// Orders references by (centroid[axis], primitive): a total order, so sorting is deterministic.
+// Orders references by centroid[axis], then primitive, then bounds: a total order on the whole
+// record (pre-split pieces of one triangle can share centroid and primitive), so references that tie
+// are byte-identical and any sort, parallel or not, gives the same bytes.
 struct CentroidOrder {
     int axis;
     bool operator()(const Reference& a, const Reference& b) const {
         const float ca = a.centroid(axis), cb = b.centroid(axis);
-        return ca < cb || (ca == cb && a.primitive < b.primitive);
+        if (ca != cb) return ca < cb;
+        if (a.primitive != b.primitive) return a.primitive < b.primitive;
+        for (int k = 0; k < 3; ++k) {
+            if (a.bounds.lo[k] != b.bounds.lo[k]) return a.bounds.lo[k] < b.bounds.lo[k];
+            if (a.bounds.hi[k] != b.bounds.hi[k]) return a.bounds.hi[k] < b.bounds.hi[k];
+        }
+        return false;
     }
 };
 

@@ -11,9 +11,8 @@ namespace spacebvh::build {
 
 enum class SplitKind : uint8_t {
     none,
-    // References whose (centroid[axis], primitive) is lexicographically below
-    // (position, tie_primitive) go left: a cut in the centroid-sorted order (object sweep, and the
-    // median fallback).
+    // References that come before `tie` in CentroidOrder go left: a cut in the centroid-sorted order
+    // (object sweep, and the median fallback).
     object_sorted,
     // References whose centroid falls in a bin below `bin` go left (binned object SAH). The bin
     // function is ObjectBinning's, so the partition reproduces the finder's counts exactly.
@@ -44,8 +43,8 @@ struct Split {
     SplitKind kind = SplitKind::none;
     float cost = kInfinity;
     int axis = 0;
-    float position = 0;                   // object_sorted
-    uint32_t tie_primitive = 0;           // object_sorted
+    float position = 0;                   // spatial: the plane
+    Reference tie;                        // object_sorted: the first reference of the right child
     ObjectBinning binning;                // object_binned
     uint32_t bin = 0;                     // object_binned: first bin of the right child
     AABB left_bounds, right_bounds;       // boxes of the children this split makes

@@ -40,10 +40,37 @@ bool zero_area_float32(const Triangle& tri) {
 // exactly opposite values whatever rounding or FMA does: a ray can never slip between them
 // (watertight), and a ray exactly on the edge gets 0 and hits both (closed triangles). Not inlined,
 // so every call site runs the very same instructions (the same FMA choices).
-[[gnu::noinline]] double edge_side(const DVec3& dir, Vec3 p, const DVec3& p_rel, Vec3 q, const DVec3& q_rel) {
+//
+// Exactness: the double value carries rounding noise, so a ray exactly through a shared vertex would
+// get small random signs on the edges meeting there, and if they all agree around the vertex no
+// triangle of the fan is hit. So when the double value is within its forward error bound of zero, the
+// edge function is recomputed in quad precision (__float128, 113-bit significand) from the float
+// inputs: the differences of floats and the triple products of such differences are then exact for
+// any realistic coordinate range, so exact zeros come out as zeros.
+double edge_side_exact(const Ray& ray, Vec3 p, Vec3 q) {
+    using Quad = __float128;
+    const Quad px = Quad(p.x) - Quad(ray.org.x), py = Quad(p.y) - Quad(ray.org.y), pz = Quad(p.z) - Quad(ray.org.z);
+    const Quad qx = Quad(q.x) - Quad(ray.org.x), qy = Quad(q.y) - Quad(ray.org.y), qz = Quad(q.z) - Quad(ray.org.z);
+    const Quad value = Quad(ray.dir.x) * (py * qz - pz * qy) + Quad(ray.dir.y) * (pz * qx - px * qz) +
+                       Quad(ray.dir.z) * (px * qy - py * qx);
+    return value > 0 ? 1.0 : (value < 0 ? -1.0 : 0.0);
+}
+
+[[gnu::noinline]] double edge_side(const Ray& ray, const DVec3& dir, Vec3 p, const DVec3& p_rel, Vec3 q,
+                                   const DVec3& q_rel) {
     const bool q_first = q.x < p.x || (q.x == p.x && (q.y < p.y || (q.y == p.y && q.z < p.z)));
-    if (q_first) return -ddot(dir, dcross(q_rel, p_rel));
-    return ddot(dir, dcross(p_rel, q_rel));
+    const Vec3& first = q_first ? q : p;
+    const Vec3& second = q_first ? p : q;
+    const DVec3& first_rel = q_first ? q_rel : p_rel;
+    const DVec3& second_rel = q_first ? p_rel : q_rel;
+    const double value = ddot(dir, dcross(first_rel, second_rel));
+    // |error| <= 8 ulp of the sum of the magnitudes of the six products (the differences p - org
+    // add at most one more rounding each).
+    const double magnitude = std::fabs(dir.x) * (std::fabs(first_rel.y * second_rel.z) + std::fabs(first_rel.z * second_rel.y)) +
+                             std::fabs(dir.y) * (std::fabs(first_rel.z * second_rel.x) + std::fabs(first_rel.x * second_rel.z)) +
+                             std::fabs(dir.z) * (std::fabs(first_rel.x * second_rel.y) + std::fabs(first_rel.y * second_rel.x));
+    const double signed_value = std::fabs(value) > 8.0 * 0x1p-52 * magnitude ? value : edge_side_exact(ray, first, second);
+    return q_first ? -signed_value : signed_value;
 }
 
 // Running totals of one thread; keeps only the smallest wrong indices so memory stays bounded.
@@ -72,13 +99,12 @@ std::optional<double> intersect_triangle_exact(const Ray& ray, const Triangle& t
     const DVec3 c = dsub(tri.v2, ray.org);
 
     // Edge functions of the edges opposite v0, v1, v2 (Plücker). Inside, including the boundary,
-    // when none has a sign different from the others. This is double precision rather than exact
-    // arithmetic: a value within about 1e-16 (relative) of zero may round to either side, but always
-    // the same way for both triangles of a shared edge, which is what closedness and watertightness need.
-    const double u = edge_side(dir, tri.v1, b, tri.v2, c);
-    const double v = edge_side(dir, tri.v2, c, tri.v0, a);
+    // when none has a sign different from the others. Signs are exact (see edge_side), and the same
+    // for both triangles of a shared edge: closed and watertight at edges and vertices.
+    const double u = edge_side(ray, dir, tri.v1, b, tri.v2, c);
+    const double v = edge_side(ray, dir, tri.v2, c, tri.v0, a);
     if ((u < 0.0 && v > 0.0) || (u > 0.0 && v < 0.0)) return std::nullopt;  // early out: most misses
-    const double w = edge_side(dir, tri.v0, a, tri.v1, b);
+    const double w = edge_side(ray, dir, tri.v0, a, tri.v1, b);
     const bool any_negative = u < 0.0 || v < 0.0 || w < 0.0;
     const bool any_positive = u > 0.0 || v > 0.0 || w > 0.0;
     if (any_negative && any_positive) return std::nullopt;

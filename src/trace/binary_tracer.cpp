@@ -190,7 +190,7 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         if (child.is_leaf()) {
             auto [first, count] = add_leaf(child);
             // A leaf of degenerate triangles only can never be hit: give it an empty box.
-            set_child(layout.nodes[compact], slot, count ? child.bounds : AABB::empty(), first, count);
+            set_child(layout.nodes[compact], slot, count ? child.bounds : AABB::empty(), count ? first : 0, count);
         } else {
             set_child(layout.nodes[compact], slot, child.bounds, 0, 0);
         }

@@ -1,0 +1,813 @@
+// The builders (include/spacebvh/bvh.hpp) on every builtin scene: tree invariants, answers of the
+// binary tracer against Embree with the exact arbiter settling disagreements (../shared/spec/rays.md),
+// determinism across thread counts, the build options, and edge-case scenes.
+#include <gtest/gtest.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "embree/embree_scene.hpp"
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/clip.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/metrics.hpp"
+#include "spacebvh/rays.hpp"
+#include "spacebvh/tracer.hpp"
+#include "spacebvh/verify.hpp"
+
+using namespace spacebvh;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------------
+// Tree invariants.
+
+// Object-partitioning builders put every triangle in exactly one leaf with its whole box; the others
+// (spatial splits) may clip a triangle into several leaves.
+bool partitions_objects(const std::string& builder) { return builder == "cbvh" || builder == "binned"; }
+
+// Checks the structure of a built tree: every node reachable exactly once, children after their
+// parent, boxes containing their children, leaves listing the primitives array in order without gaps
+// and each triangle at most once, nodes = 2 * leaves - 1, depth <= max_depth, leaves no larger than
+// max_leaf_size unless at max_depth, references within the budget, and every triangle in some leaf.
+// Object partitioning: each triangle in exactly one leaf whose box contains the triangle's box.
+// Spatial splits: each leaf box touches its triangles, and each vertex of a triangle lies in the box
+// of a leaf that lists it. Returns "" when all hold, else a description of the first violations.
+std::string tree_violations(const Scene& scene, const Bvh& bvh, const BuildOptions& options,
+                            uint32_t* depth_out = nullptr) {
+    std::ostringstream problems;
+    int reported = 0;
+    auto problem = [&](const std::string& text) {
+        if (reported++ < 8) problems << text << "; ";
+    };
+    if (bvh.nodes.empty()) return "no nodes";
+    const bool strict = partitions_objects(options.builder);
+    std::vector<uint8_t> reached(bvh.nodes.size(), 0);
+    std::vector<uint32_t> seen(scene.triangles.size(), 0);
+    std::vector<uint8_t> vertex_covered(scene.triangles.size(), 0);  // bit i: vertex i in a listing leaf's box
+    size_t leaves = 0, next_primitive = 0;
+    uint32_t max_depth = 0;
+    // Depth-first, left child first: the order the builder emits nodes and leaf primitives in.
+    std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
+    while (!stack.empty()) {
+        const auto [index, depth] = stack.back();
+        stack.pop_back();
+        if (index >= bvh.nodes.size()) {
+            problem("node index " + std::to_string(index) + " out of range");
+            continue;
+        }
+        if (reached[index]++) {
+            problem("node " + std::to_string(index) + " reached twice");
+            continue;
+        }
+        max_depth = std::max(max_depth, depth);
+        const BvhNode& node = bvh.nodes[index];
+        if (node.bounds.is_empty()) problem("node " + std::to_string(index) + " has an empty box");
+        if (!node.is_leaf()) {
+            if (node.first <= index || size_t(node.first) + 1 >= bvh.nodes.size()) {
+                problem("inner node " + std::to_string(index) + " has children at " + std::to_string(node.first));
+                continue;
+            }
+            for (uint32_t c = node.first; c < node.first + 2; ++c)
+                if (!node.bounds.contains(bvh.nodes[c].bounds))
+                    problem("node " + std::to_string(index) + " does not contain its child " + std::to_string(c));
+            stack.push_back({node.first + 1, depth + 1});  // right pushed first: left is visited first
+            stack.push_back({node.first, depth + 1});
+            continue;
+        }
+        ++leaves;
+        if (node.first != next_primitive)
+            problem("leaf " + std::to_string(index) + " starts at " + std::to_string(node.first) + ", expected " +
+                    std::to_string(next_primitive));
+        next_primitive = size_t(node.first) + node.reference_count;
+        if (next_primitive > bvh.primitives.size()) {
+            problem("leaf " + std::to_string(index) + " runs past the primitives array");
+            continue;
+        }
+        if (node.reference_count > options.max_leaf_size && depth < options.max_depth)
+            problem("leaf " + std::to_string(index) + " holds " + std::to_string(node.reference_count) +
+                    " references at depth " + std::to_string(depth));
+        std::vector<uint32_t> listed(bvh.primitives.begin() + node.first, bvh.primitives.begin() + next_primitive);
+        std::sort(listed.begin(), listed.end());
+        if (std::adjacent_find(listed.begin(), listed.end()) != listed.end())
+            problem("leaf " + std::to_string(index) + " lists a triangle twice");
+        for (const uint32_t primitive : listed) {
+            if (primitive >= scene.triangles.size()) {
+                problem("primitive " + std::to_string(primitive) + " out of range");
+                continue;
+            }
+            ++seen[primitive];
+            const Triangle& triangle = scene.triangles[primitive];
+            if (strict) {
+                if (!node.bounds.contains(triangle.bounds()))
+                    problem("leaf " + std::to_string(index) + " does not contain triangle " + std::to_string(primitive));
+            } else if (clip_triangle_bounds(triangle, node.bounds).is_empty()) {
+                problem("leaf " + std::to_string(index) + " box misses its triangle " + std::to_string(primitive));
+            }
+            for (int v = 0; v < 3; ++v)
+                if (node.bounds.contains(triangle.vertex(v))) vertex_covered[primitive] |= uint8_t(1u << v);
+        }
+    }
+    if (max_depth > options.max_depth)
+        problem("depth " + std::to_string(max_depth) + " exceeds max_depth " + std::to_string(options.max_depth));
+    for (size_t i = 0; i < reached.size(); ++i)
+        if (!reached[i]) {
+            problem("node " + std::to_string(i) + " unreachable");
+            break;
+        }
+    if (next_primitive != bvh.primitives.size())
+        problem("leaves cover " + std::to_string(next_primitive) + " of " + std::to_string(bvh.primitives.size()) +
+                " primitive entries");
+    const size_t budget = strict ? scene.triangles.size()
+                                 : std::max(scene.triangles.size(),
+                                            size_t(double(options.reference_budget) * double(scene.triangles.size())));
+    if (bvh.primitives.size() > budget)
+        problem(std::to_string(bvh.primitives.size()) + " references exceed the budget of " + std::to_string(budget));
+    for (size_t i = 0; i < seen.size(); ++i) {
+        if (seen[i] == 0 || (strict && seen[i] != 1)) {
+            problem("triangle " + std::to_string(i) + " appears in " + std::to_string(seen[i]) + " leaves");
+            break;
+        }
+        if (vertex_covered[i] != 7) {
+            problem("a vertex of triangle " + std::to_string(i) + " lies in no leaf box that lists it");
+            break;
+        }
+    }
+    if (bvh.nodes.size() != 2 * leaves - 1)
+        problem(std::to_string(bvh.nodes.size()) + " nodes for " + std::to_string(leaves) + " leaves");
+    if (depth_out) *depth_out = max_depth;
+    return problems.str();
+}
+
+// Every node's box is exactly the union of the triangle boxes below it (object partitioning keeps
+// boxes tight).
+std::string loose_boxes(const Scene& scene, const Bvh& bvh) {
+    std::vector<AABB> computed(bvh.nodes.size());
+    // Children come after parents, so a reverse sweep sees children first.
+    for (size_t i = bvh.nodes.size(); i-- > 0;) {
+        const BvhNode& node = bvh.nodes[i];
+        AABB box;
+        if (node.is_leaf()) {
+            for (uint32_t p = node.first; p < node.first + node.reference_count; ++p)
+                box.extend(scene.triangles[bvh.primitives[p]].bounds());
+        } else {
+            box = merge(computed[node.first], computed[node.first + 1]);
+        }
+        computed[i] = box;
+        if (!(box == node.bounds)) return "node " + std::to_string(i) + " box is not tight";
+    }
+    return "";
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Answers.
+
+std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
+    std::vector<Hit> hits(rays.size());
+    tracer.intersect(rays, hits);
+    std::vector<HitRecord> records(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) records[i] = to_record(hits[i]);
+    return records;
+}
+
+std::vector<HitRecord> occlusion_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
+    std::vector<uint8_t> occluded(rays.size());
+    tracer.occluded(rays, occluded);
+    std::vector<HitRecord> records(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
+    return records;
+}
+
+// Brute-force truth for a few rays, in parallel.
+void arbiter_records(const Scene& scene, std::span<const Ray> rays, std::vector<HitRecord>& closest,
+                     std::vector<HitRecord>& occlusion) {
+    closest.assign(rays.size(), {});
+    occlusion.assign(rays.size(), {});
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+            closest[i] = arbiter_closest_hit(scene, rays[i]);
+            occlusion[i] = arbiter_occlusion(scene, rays[i]);
+        }
+    });
+}
+
+// Counts our answers that disagree with the arbiter's, listing a few.
+std::string wrong_against_arbiter(const Scene& scene, const BinaryTracer& tracer, std::span<const Ray> rays) {
+    std::vector<HitRecord> truth_closest, truth_occlusion;
+    arbiter_records(scene, rays, truth_closest, truth_occlusion);
+    const std::vector<HitRecord> ours_closest = closest_records(tracer, rays);
+    const std::vector<HitRecord> ours_occlusion = occlusion_records(tracer, rays);
+    const float diagonal = scene.diagonal();
+    size_t wrong = 0;
+    std::ostringstream text;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const bool closest_ok = hits_agree(ours_closest[i], truth_closest[i], rays[i], diagonal);
+        const bool occlusion_ok = ours_occlusion[i].is_hit() == truth_occlusion[i].is_hit();
+        if (closest_ok && occlusion_ok) continue;
+        if (wrong++ < 5)
+            text << "ray " << i << ": ours t=" << ours_closest[i].t << " prim=" << ours_closest[i].primitive
+                 << " occluded=" << ours_occlusion[i].is_hit() << ", arbiter t=" << truth_closest[i].t
+                 << " prim=" << truth_closest[i].primitive << " occluded=" << truth_occlusion[i].is_hit() << "; ";
+    }
+    if (wrong == 0) return "";
+    return std::to_string(wrong) + " of " + std::to_string(rays.size()) + " rays wrong: " + text.str();
+}
+
+// Rays for small hand-made scenes: random rays plus rays aimed exactly at vertices and edge midpoints.
+std::vector<Ray> probing_rays(const Scene& scene, size_t random_count, uint64_t seed) {
+    AABB bounds = scene.bounds();
+    // Random origins in a box a little larger than the scene, so that rays also come from outside.
+    const Vec3 pad = bounds.extent() * 0.25f + Vec3(0.01f);
+    bounds = {bounds.lo - pad, bounds.hi + pad};
+    std::vector<Ray> rays = generate_random_rays(bounds, random_count, seed);
+    SplitMix64 rng(seed * 7919 + 1);
+    const size_t aimed = std::min<size_t>(scene.triangles.size(), 400);
+    for (size_t k = 0; k < aimed; ++k) {
+        const Triangle& t = scene.triangles[(k * 7919) % scene.triangles.size()];
+        for (const Vec3 target : {t.v0, t.v1, (t.v1 + t.v2) * 0.5f, (t.v0 + t.v1 + t.v2) * (1.0f / 3.0f)}) {
+            Ray ray;
+            ray.org = {bounds.lo.x + rng.uniform() * (bounds.hi.x - bounds.lo.x),
+                       bounds.lo.y + rng.uniform() * (bounds.hi.y - bounds.lo.y),
+                       bounds.lo.z + rng.uniform() * (bounds.hi.z - bounds.lo.z)};
+            ray.dir = target - ray.org;
+            if (ray.dir == Vec3(0.0f)) continue;
+            rays.push_back(ray);
+        }
+    }
+    return rays;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Builtin scenes with their rays and Embree's answers, loaded once per process.
+
+struct SceneCase {
+    std::string name;
+    Scene scene;
+    std::vector<Ray> rays[3];  // random, primary, diffuse
+    std::vector<HitRecord> embree_closest[3], embree_occlusion[3];
+};
+
+const char* kKindNames[3] = {"random", "primary", "diffuse"};
+
+const Scene& builtin(const std::string& name) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<Scene>> cache;
+    std::lock_guard lock(mutex);
+    auto& slot = cache[name];
+    if (!slot) slot = std::make_unique<Scene>(load_scene("builtin:" + name));
+    return *slot;
+}
+
+const SceneCase& scene_case(const std::string& name) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<SceneCase>> cache;
+    std::lock_guard lock(mutex);
+    auto& slot = cache[name];
+    if (slot) return *slot;
+    auto c = std::make_unique<SceneCase>();
+    c->name = name;
+    c->scene = builtin(name);
+    const EmbreeScene embree(c->scene, EmbreeQuality::medium);
+    // >= 10k rays of each kind: 10,000 random, 128 x 80 = 10,240 primary, diffuse from Embree's primary hits.
+    c->rays[0] = generate_random_rays(c->scene.bounds(), 10000, 1);
+    const Camera camera = camera_for_scene(c->scene, "builtin:" + name, SceneTransform{});
+    c->rays[1] = generate_primary_rays(camera, 128, 80);
+    // Diffuse rays start at primary hits; where few primary rays hit (soup, organic), take them from a
+    // finer image until there are >= 10k, then thin them evenly to at most 12k.
+    for (uint32_t scale = 1; c->rays[2].size() < 10000 && scale <= 8; scale *= 2) {
+        const std::vector<Ray> source = generate_primary_rays(camera, 128 * scale, 80 * scale);
+        std::vector<Hit> primary_hits(source.size());
+        embree.intersect(source, primary_hits);
+        c->rays[2] = generate_diffuse_rays(c->scene, source, primary_hits, 1);
+    }
+    if (c->rays[2].size() > 12000) {
+        std::vector<Ray> thinned;
+        const double step = double(c->rays[2].size()) / 12000.0;
+        for (size_t i = 0; i < 12000; ++i) thinned.push_back(c->rays[2][size_t(double(i) * step)]);
+        c->rays[2] = std::move(thinned);
+    }
+    for (int k = 0; k < 3; ++k) {
+        std::vector<Hit> hits(c->rays[k].size());
+        std::vector<uint8_t> occluded(c->rays[k].size());
+        embree.intersect(c->rays[k], hits);
+        embree.occluded(c->rays[k], occluded);
+        c->embree_closest[k].resize(hits.size());
+        c->embree_occlusion[k].resize(hits.size());
+        for (size_t i = 0; i < hits.size(); ++i) {
+            c->embree_closest[k][i] = to_record(hits[i]);
+            c->embree_occlusion[k][i] = occlusion_record(occluded[i]);
+        }
+    }
+    slot = std::move(c);
+    return *slot;
+}
+
+// Our answers on the case's rays against Embree's; every disagreement goes to the arbiter. Expects
+// none of ours wrong and reports Embree's wrong count.
+void expect_agrees_with_embree(const SceneCase& c, const BinaryTracer& tracer, const std::string& label) {
+    for (int k = 0; k < 3; ++k) {
+        SCOPED_TRACE(label + ", " + kKindNames[k] + " rays");
+        const auto& rays = c.rays[k];
+        ASSERT_GE(rays.size(), 10000u);
+        const VerificationReport closest =
+            verify_against_reference(c.scene, rays, closest_records(tracer, rays), c.embree_closest[k], false);
+        const VerificationReport occlusion =
+            verify_against_reference(c.scene, rays, occlusion_records(tracer, rays), c.embree_occlusion[k], true);
+        EXPECT_EQ(closest.ours_wrong, 0u) << "closest hit; first wrong ray "
+                                          << (closest.wrong_rays.empty() ? 0 : closest.wrong_rays.front());
+        EXPECT_EQ(occlusion.ours_wrong, 0u) << "occlusion; first wrong ray "
+                                            << (occlusion.wrong_rays.empty() ? 0 : occlusion.wrong_rays.front());
+        ::testing::Test::RecordProperty(label + "_" + kKindNames[k] + "_embree_wrong",
+                                        std::to_string(closest.reference_wrong + occlusion.reference_wrong));
+        if (closest.reference_wrong + occlusion.reference_wrong > 0)
+            std::printf("[ info ] %s %s rays: Embree medium wrong on %zu closest, %zu occlusion of %zu\n",
+                        label.c_str(), kKindNames[k], closest.reference_wrong, occlusion.reference_wrong, rays.size());
+    }
+}
+
+std::string first_difference(const Bvh& a, const Bvh& b) {
+    if (a.nodes.size() != b.nodes.size())
+        return "node counts " + std::to_string(a.nodes.size()) + " vs " + std::to_string(b.nodes.size());
+    if (a.primitives.size() != b.primitives.size())
+        return "primitive counts " + std::to_string(a.primitives.size()) + " vs " + std::to_string(b.primitives.size());
+    static_assert(sizeof(BvhNode) == 32, "BvhNode is compared byte for byte");
+    for (size_t i = 0; i < a.nodes.size(); ++i)
+        if (std::memcmp(&a.nodes[i], &b.nodes[i], sizeof(BvhNode)) != 0) return "node " + std::to_string(i) + " differs";
+    if (std::memcmp(a.primitives.data(), b.primitives.data(), a.primitives.size() * sizeof(uint32_t)) != 0)
+        return "primitive arrays differ";
+    return "";
+}
+
+Bvh build_in_arena(int threads, const Scene& scene, const BuildOptions& options) {
+    tbb::task_arena arena(threads);
+    Bvh bvh;
+    arena.execute([&] { bvh = build_bvh(scene, options); });
+    return bvh;
+}
+
+std::string param_name(std::string text) {
+    for (char& c : text)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return text;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Parameterised over (builder, builtin scene).
+
+class BuilderOnScene : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {
+protected:
+    const std::string& builder() const { return std::get<0>(GetParam()); }
+    const std::string& scene_name() const { return std::get<1>(GetParam()); }
+};
+
+std::string builder_scene_name(const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& info) {
+    return param_name(std::get<0>(info.param) + "_" + std::get<1>(info.param));
+}
+
+}  // namespace
+
+// Structure (reachability, containment, leaf ranges and sizes, depth, node count, tight boxes);
+// closest hit and occlusion against Embree, or the arbiter where they differ, on >= 10k rays per
+// kind; and the same tree byte for byte when built with 1 thread instead of 2. (One test, so that the
+// slow builders build each scene only twice.)
+TEST_P(BuilderOnScene, TreeIsValidAgreesWithEmbreeAndIsDeterministic) {
+    const SceneCase& c = scene_case(scene_name());
+    const BuildOptions options = options_for(builder());
+    const Bvh bvh = build_in_arena(2, c.scene, options);
+    EXPECT_EQ(bvh.builder, builder());
+    uint32_t depth = 0;
+    EXPECT_EQ(tree_violations(c.scene, bvh, options, &depth), "");
+    if (partitions_objects(builder())) {
+        EXPECT_EQ(loose_boxes(c.scene, bvh), "");
+    }
+    EXPECT_GT(depth, 5u);  // tens of thousands of triangles need a real tree
+    const TreeStats stats = compute_tree_stats(c.scene, bvh, options.cost, false);
+    EXPECT_EQ(stats.distinct_primitives, c.scene.triangles.size());
+    EXPECT_EQ(stats.max_depth, depth);
+
+    {
+        const BinaryTracer tracer(c.scene, bvh);
+        expect_agrees_with_embree(c, tracer, builder() + "_" + scene_name());
+    }
+
+    const Bvh one_thread = build_in_arena(1, c.scene, options);
+    EXPECT_EQ(first_difference(one_thread, bvh), "") << "1 vs 2 threads";
+}
+
+INSTANTIATE_TEST_SUITE_P(Builtin, BuilderOnScene,
+                         ::testing::Combine(::testing::ValuesIn(builder_names()),
+                                            ::testing::ValuesIn(builtin_scene_names())),
+                         builder_scene_name);
+
+namespace {
+
+class PerBuiltinScene : public ::testing::TestWithParam<std::string> {};
+class PerBuilder : public ::testing::TestWithParam<std::string> {};
+class ObjectBuilder : public ::testing::TestWithParam<std::string> {};
+
+// The first `count` triangles of the soup: big enough for the parallel build paths, quick to build.
+Scene soup_prefix(size_t count) {
+    Scene scene = builtin("soup");
+    scene.triangles.resize(count);
+    scene.name = "soup_" + std::to_string(count);
+    return scene;
+}
+
+std::string plain_name(const ::testing::TestParamInfo<std::string>& info) { return param_name(info.param); }
+
+}  // namespace
+
+// The exact sweep (cbvh) never gives a worse tree SAH than the binned approximation.
+TEST_P(PerBuiltinScene, CbvhTreeSahIsAtMostBinned) {
+    const Scene& scene = builtin(GetParam());
+    const BuildOptions sweep = options_for("cbvh"), binned = options_for("binned");
+    const double sah_cbvh = tree_sah(build_bvh(scene, sweep), sweep.cost);
+    const double sah_binned = tree_sah(build_bvh(scene, binned), binned.cost);
+    RecordProperty("sah_cbvh", std::to_string(sah_cbvh));
+    RecordProperty("sah_binned", std::to_string(sah_binned));
+    EXPECT_GT(sah_cbvh, 0.0);
+    EXPECT_LE(sah_cbvh, sah_binned) << GetParam();
+}
+
+INSTANTIATE_TEST_SUITE_P(Builtin, PerBuiltinScene, ::testing::ValuesIn(builtin_scene_names()), plain_name);
+
+// Brute force (no Embree): our answers equal the arbiter's on 300 rays of each kind on the soup.
+TEST_P(PerBuilder, AnswersEqualTheArbiterOnTheSoup) {
+    const Scene& scene = builtin("soup");
+    const Bvh bvh = build_bvh(scene, options_for(GetParam()));
+    const BinaryTracer tracer(scene, bvh);
+    const std::vector<Ray> random = generate_random_rays(scene.bounds(), 300, 1);
+    // 20 x 15 = 300 primary rays.
+    const std::vector<Ray> primary = generate_primary_rays(camera_for_scene(scene, "builtin:soup", {}), 20, 15);
+    // Diffuse rays from many more primary rays, cut to 300.
+    const std::vector<Ray> more_primary = generate_primary_rays(camera_for_scene(scene, "builtin:soup", {}), 64, 48);
+    std::vector<Hit> hits(more_primary.size());
+    tracer.intersect(more_primary, hits);
+    std::vector<Ray> diffuse = generate_diffuse_rays(scene, more_primary, hits, 1);
+    ASSERT_GE(diffuse.size(), 300u);
+    diffuse.resize(300);
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, random), "") << "random";
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, primary), "") << "primary";
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, diffuse), "") << "diffuse";
+}
+
+namespace {
+
+// Small random scenes with features that stress partitioning: clusters, duplicates, degenerate
+// triangles, axis-aligned and coplanar triangles, long slivers.
+Scene small_random_scene(uint64_t seed, size_t count) {
+    SplitMix64 rng(seed);
+    Scene scene;
+    scene.name = "small_" + std::to_string(seed);
+    auto point = [&](float scale) {
+        return Vec3(scale * (2 * rng.uniform() - 1), scale * (2 * rng.uniform() - 1), scale * (2 * rng.uniform() - 1));
+    };
+    while (scene.triangles.size() < count) {
+        const float choice = rng.uniform();
+        const Vec3 c = point(10.0f);
+        if (choice < 0.4f) {
+            scene.triangles.push_back({c + point(1.0f), c + point(1.0f), c + point(1.0f)});
+        } else if (choice < 0.5f && !scene.triangles.empty()) {
+            scene.triangles.push_back(scene.triangles[size_t(rng.uniform() * float(scene.triangles.size()))]);
+        } else if (choice < 0.6f) {
+            const Vec3 d = point(1.0f);
+            scene.triangles.push_back({c, c + d, c + d * 2.0f});  // degenerate (collinear)
+        } else if (choice < 0.75f) {
+            const float z = std::round(c.z);  // axis-aligned, on shared integer planes
+            scene.triangles.push_back({{std::round(c.x), std::round(c.y), z},
+                                       {std::round(c.x) + 1, std::round(c.y), z},
+                                       {std::round(c.x), std::round(c.y) + 1, z}});
+        } else if (choice < 0.85f) {
+            scene.triangles.push_back({c, c + Vec3(15.0f, 0.1f, 0.0f), c + Vec3(0.0f, 0.2f, 0.05f)});  // sliver
+        } else {
+            // A small cluster around one point.
+            for (int i = 0; i < 4; ++i)
+                scene.triangles.push_back({c + point(0.05f), c + point(0.05f), c + point(0.05f)});
+        }
+    }
+    for (const Triangle& t : scene.triangles) scene.degenerate_count += t.is_degenerate();
+    return scene;
+}
+
+}  // namespace
+
+// Many small scenes and option combinations: invariants hold and every answer equals the arbiter's.
+TEST_P(PerBuilder, SmallScenesWithManyOptionsMatchTheArbiter) {
+    struct Variant {
+        uint32_t max_leaf, max_depth, bins;
+        float c_o;
+    };
+    const Variant variants[] = {{8, 64, 32, 0.0f}, {1, 64, 2, 0.0f},  {2, 64, 256, 1.0f}, {4, 3, 16, kInfinity},
+                                {1, 1024, 7, 0.0f}, {3, 64, 32, kInfinity}, {16, 2, 32, 0.5f}};
+    uint64_t seed = 11;
+    for (const size_t count : {1, 2, 3, 9, 40, 150, 700}) {
+        for (const Variant& v : variants) {
+            const Scene scene = small_random_scene(++seed, count);
+            BuildOptions options = options_for(GetParam());
+            options.max_leaf_size = v.max_leaf;
+            options.max_depth = v.max_depth;
+            options.object_bins = v.bins;
+            options.cost.overlap_penalty = v.c_o;
+            SCOPED_TRACE(scene.name + " (" + std::to_string(scene.triangles.size()) + " triangles), max leaf " +
+                         std::to_string(v.max_leaf) + ", max depth " + std::to_string(v.max_depth) + ", bins " +
+                         std::to_string(v.bins) + ", C_o " + std::to_string(v.c_o));
+            const Bvh bvh = build_bvh(scene, options);
+            ASSERT_EQ(tree_violations(scene, bvh, options), "");
+            const BinaryTracer tracer(scene, bvh);
+            EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 300, seed)), "");
+        }
+    }
+}
+
+// max_leaf_size bounds every leaf (no leaf reaches max_depth here, so none is exempt).
+TEST_P(PerBuilder, MaxLeafSizeIsRespected) {
+    const Scene scene = soup_prefix(6000);
+    for (uint32_t max_leaf : {1u, 3u, 16u}) {
+        BuildOptions options = options_for(GetParam());
+        options.max_leaf_size = max_leaf;
+        const Bvh bvh = build_bvh(scene, options);
+        uint32_t depth = 0;
+        EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "") << "max leaf " << max_leaf;
+        EXPECT_LT(depth, options.max_depth);
+        uint32_t largest = 0;
+        for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
+        EXPECT_LE(largest, max_leaf);
+        if (max_leaf == 1) { EXPECT_EQ(bvh.nodes.size(), 2 * bvh.primitives.size() - 1); }
+    }
+}
+
+// max_depth bounds the depth; the deepest leaves then hold more than max_leaf_size, and answers stay right.
+TEST_P(PerBuilder, MaxDepthIsRespected) {
+    const SceneCase& c = scene_case("interior");
+    for (uint32_t max_depth : {1u, 4u, 10u}) {
+        BuildOptions options = options_for(GetParam());
+        options.max_depth = max_depth;
+        const Bvh bvh = build_bvh(c.scene, options);
+        uint32_t depth = 0;
+        EXPECT_EQ(tree_violations(c.scene, bvh, options, &depth), "") << "max depth " << max_depth;
+        EXPECT_EQ(depth, max_depth);
+        uint32_t largest = 0;
+        for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
+        EXPECT_GT(largest, options.max_leaf_size);
+        if (max_depth == 1) { EXPECT_EQ(bvh.nodes.size(), 3u); }
+        if (max_depth == 10) expect_agrees_with_embree(c, BinaryTracer(c.scene, bvh), GetParam() + "_depth10");
+    }
+}
+
+// C_o = inf (disjoint children only) with an object builder still builds a valid tree (the median
+// fallback splits where no object split is disjoint) that answers correctly. (Finite C_o: see
+// SmallScenesWithManyOptionsMatchTheArbiter.)
+TEST_P(ObjectBuilder, InfiniteOverlapPenaltyBuildsValidCorrectTrees) {
+    for (const char* name : {"soup", "interior-rotated"}) {
+        const SceneCase& c = scene_case(name);
+        BuildOptions options = options_for(GetParam());
+        options.cost.overlap_penalty = kInfinity;
+        const Bvh bvh = build_bvh(c.scene, options);
+        EXPECT_EQ(bvh.cost.overlap_penalty, kInfinity);
+        EXPECT_EQ(tree_violations(c.scene, bvh, options), "") << name;
+        expect_agrees_with_embree(c, BinaryTracer(c.scene, bvh), GetParam() + "_" + name + "_co_inf");
+    }
+}
+
+// One triangle: a single leaf root that is hit where expected.
+TEST_P(PerBuilder, OneTriangleScene) {
+    Scene scene;
+    scene.name = "one";
+    scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
+    const BuildOptions options = options_for(GetParam());
+    const Bvh bvh = build_bvh(scene, options);
+    ASSERT_EQ(bvh.nodes.size(), 1u);
+    EXPECT_TRUE(bvh.root().is_leaf());
+    EXPECT_EQ(bvh.root().reference_count, 1u);
+    EXPECT_EQ(bvh.primitives, std::vector<uint32_t>{0});
+    EXPECT_EQ(bvh.root().bounds, scene.triangles[0].bounds());
+    const BinaryTracer tracer(scene, bvh);
+    Ray ray;
+    ray.org = {0.25f, 0.25f, 2.0f};
+    ray.dir = {0, 0, -1};
+    const Hit hit = tracer.intersect(ray);
+    EXPECT_EQ(hit.primitive, 0u);
+    EXPECT_EQ(hit.t, 2.0f);
+    EXPECT_TRUE(tracer.occluded(ray));
+    ray.org = {0.75f, 0.75f, 2.0f};
+    EXPECT_FALSE(tracer.intersect(ray).is_hit());
+    EXPECT_FALSE(tracer.occluded(ray));
+}
+
+// Many identical triangles (all centroids equal, far more than max_leaf_size): split anyway, traced right.
+TEST_P(PerBuilder, IdenticalTrianglesAreSplitAndTraced) {
+    Scene scene;
+    scene.name = "identical";
+    const Triangle t{{-1, -1, 3}, {2, -1, 3}, {-1, 2, 3}};
+    scene.triangles.assign(100, t);
+    const BuildOptions options = options_for(GetParam());
+    const Bvh bvh = build_bvh(scene, options);
+    uint32_t depth = 0;
+    EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "");
+    EXPECT_LE(depth, 10u);  // halving: about log2(100 / 8) + 1 levels
+    const BinaryTracer tracer(scene, bvh);
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 500, 3)), "");
+    Ray ray;
+    ray.org = {0, 0, 0};
+    ray.dir = {0, 0, 1};
+    const Hit hit = tracer.intersect(ray);
+    ASSERT_TRUE(hit.is_hit());
+    EXPECT_EQ(hit.t, 3.0f);
+    EXPECT_LT(hit.primitive, 100u);
+}
+
+// Different triangles that share one centroid (no centroid cut separates them) and nested sizes.
+TEST_P(PerBuilder, TrianglesWithOneCommonCentroidAreSplitAndTraced) {
+    Scene scene;
+    scene.name = "common_centroid";
+    const Vec3 c{0.5f, -0.25f, 2.0f};
+    for (int i = 1; i <= 60; ++i) {
+        const float s = 0.0625f * float(i);  // exact, so c - s and c + s average to c exactly
+        switch (i % 3) {
+            case 0: scene.triangles.push_back({c + Vec3(-s, -s, 0), c + Vec3(s, -s, 0), c + Vec3(0, s, 0)}); break;
+            case 1: scene.triangles.push_back({c + Vec3(0, -s, -s), c + Vec3(0, s, -s), c + Vec3(0, 0, s)}); break;
+            default: scene.triangles.push_back({c + Vec3(-s, 0, -s), c + Vec3(s, 0, s), c + Vec3(-s, 0, s)}); break;
+        }
+    }
+    for (const Triangle& t : scene.triangles) ASSERT_EQ(t.bounds().center(), c);
+    const BuildOptions options = options_for(GetParam());
+    const Bvh bvh = build_bvh(scene, options);
+    EXPECT_EQ(tree_violations(scene, bvh, options), "");
+    const BinaryTracer tracer(scene, bvh);
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 1000, 5)), "");
+}
+
+// A scene with degenerate triangles only (and a line of them): builds, and nothing is ever hit.
+TEST_P(PerBuilder, DegenerateOnlySceneBuildsAndIsNeverHit) {
+    Scene scene;
+    scene.name = "degenerate";
+    for (int i = 0; i < 50; ++i) {
+        const float x = float(i);
+        scene.triangles.push_back({{x, 0, 0}, {x + 0.5f, 0, 0}, {x + 1.0f, 0, 0}});      // collinear
+        scene.triangles.push_back({{x, 1, 1}, {x, 1, 1}, {x, 1, 1}});                    // a point
+        scene.triangles.push_back({{x, 2, 0}, {x + 1, 2.5f, 0}, {x + 1, 2.5f, 0}});      // repeated vertex
+    }
+    const BuildOptions options = options_for(GetParam());
+    const Bvh bvh = build_bvh(scene, options);
+    EXPECT_EQ(tree_violations(scene, bvh, options), "");
+    const BinaryTracer tracer(scene, bvh);
+    size_t hits = 0;
+    for (const Ray& ray : probing_rays(scene, 500, 9)) hits += tracer.intersect(ray).is_hit() + tracer.occluded(ray);
+    EXPECT_EQ(hits, 0u);
+}
+
+// Invalid options and an empty scene throw Error (never build).
+TEST(BuildOptions, InvalidOptionsAndEmptySceneThrow) {
+    Scene scene;
+    scene.name = "tiny";
+    scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{2, 0, 0}, {3, 0, 0}, {2, 1, 0}}};
+    auto with = [](auto change) {
+        BuildOptions options;
+        change(options);
+        return options;
+    };
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.builder = "no-such-builder"; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.builder = ""; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 1; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 0; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 257; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 100000; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_leaf_size = 0; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 0; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 1025; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.traversal_cost = -1.0f; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.intersection_cost = 0.0f; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.overlap_penalty = -1.0f; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.overlap_penalty = std::nanf(""); })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.spatial_bins = 1; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.spatial_bins = 1025; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = 0.5f; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = 5.0f; })), Error);
+    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = std::nanf(""); })), Error);
+    EXPECT_THROW(options_for("no-such-builder"), Error);
+    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 2; })));
+    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 256; })));
+    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 1024; })));
+
+    try {
+        build_bvh(scene, with([](BuildOptions& o) { o.builder = "nope"; }));
+        FAIL() << "no exception";
+    } catch (const Error& e) {
+        // The message names the bad builder and the known ones.
+        EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
+        for (const std::string& name : builder_names())
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+
+    Scene empty;
+    empty.name = "empty";
+    for (const std::string& name : builder_names()) EXPECT_THROW(build_bvh(empty, options_for(name)), Error) << name;
+}
+
+// builder_names() lists cbvh and binned, each with a description; the tree records builder and cost.
+TEST(BuildOptions, BuilderNamesDescriptionsAndRecordedSettings) {
+    const std::vector<std::string> names = builder_names();
+    EXPECT_NE(std::find(names.begin(), names.end(), "cbvh"), names.end());
+    EXPECT_NE(std::find(names.begin(), names.end(), "binned"), names.end());
+    for (const std::string& name : names) EXPECT_FALSE(describe_builder(name).empty()) << name;
+    EXPECT_TRUE(describe_builder("no-such-builder").empty());
+
+    Scene scene;
+    scene.name = "two";
+    scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{5, 0, 0}, {6, 0, 0}, {5, 1, 0}}};
+    BuildOptions options = options_for("cbvh");
+    options.cost.traversal_cost = 0.5f;
+    options.cost.overlap_penalty = 2.0f;
+    const Bvh bvh = build_bvh(scene, options);
+    EXPECT_EQ(bvh.builder, "cbvh");
+    EXPECT_EQ(bvh.cost.traversal_cost, 0.5f);
+    EXPECT_EQ(bvh.cost.overlap_penalty, 2.0f);
+    EXPECT_EQ(bvh.cost.intersection_cost, 1.0f);
+}
+
+// Repeated builds with 2 threads, and with 4 threads on 2 cores (oversubscription reorders tasks
+// even more), give the same tree byte for byte as a 1-thread build.
+TEST_P(PerBuilder, RepeatedAndOversubscribedBuildsAreIdentical) {
+    const Scene scene = soup_prefix(12000);
+    const BuildOptions options = options_for(GetParam());
+    const Bvh one = build_in_arena(1, scene, options);
+    const Bvh two = build_in_arena(2, scene, options);
+    const Bvh two_again = build_in_arena(2, scene, options);
+    EXPECT_EQ(first_difference(one, two), "") << "1 vs 2 threads";
+    EXPECT_EQ(first_difference(two, two_again), "") << "2 threads twice";
+    tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
+    const Bvh four = build_in_arena(4, scene, options);
+    EXPECT_EQ(first_difference(one, four), "") << "1 vs 4 threads";
+}
+
+// The progress callback reports fractions in [0, 1] and finishes with 1.
+TEST_P(PerBuilder, ProgressReportsFractionsUpToOne) {
+    const Scene scene = soup_prefix(6000);
+    BuildOptions options = options_for(GetParam());
+    std::mutex mutex;
+    std::vector<double> reports;
+    options.progress = [&](double fraction) {
+        std::lock_guard lock(mutex);
+        reports.push_back(fraction);
+    };
+    build_bvh(scene, options);
+    ASSERT_FALSE(reports.empty());
+    EXPECT_EQ(reports.back(), 1.0);
+    EXPECT_GT(reports.size(), 2u);
+    for (double f : reports) {
+        EXPECT_GE(f, 0.0);
+        EXPECT_LE(f, 1.0);
+    }
+}
+
+// With max_depth up to 1024 allowed, a builder may make trees far deeper than 64 levels; tracing such a
+// tree must still work. Collinear degenerate triangles have SA(N) = 0, where every split costs the same,
+// so the binned builder peels one bin per level (about 150 levels, both children inner nodes) and cbvh
+// one reference per level (down to max_depth).
+TEST_P(PerBuilder, VeryDeepTreesAreTracedCorrectly) {
+    Scene scene;
+    scene.name = "line";
+    for (int i = 0; i < 20000; ++i) {
+        const float x = float(i);
+        scene.triangles.push_back({{x, 0, 0}, {x + 0.5f, 0, 0}, {x + 1.0f, 0, 0}});
+    }
+    scene.triangles.push_back({{-2, -1, -1}, {-2, 1, -1}, {-2, 0, 1}});  // one real triangle at the far end
+    BuildOptions options = options_for(GetParam());
+    options.max_leaf_size = 1;
+    options.max_depth = 1024;
+    const Bvh bvh = build_bvh(scene, options);
+    uint32_t depth = 0;
+    EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "");
+    RecordProperty("depth", std::to_string(depth));
+    // The point of the scene: the binned builder makes a tree deeper than 128 levels here.
+    if (GetParam() == "binned") {
+        EXPECT_GT(depth, 128u) << "the scene no longer makes a deep tree";
+    }
+    const BinaryTracer tracer(scene, bvh);
+    // Along the line of degenerate triangles (inside every node box) to the real triangle.
+    Ray ray;
+    ray.org = {20005.0f, 0.0f, 0.0f};
+    ray.dir = {-1.0f, 0.0f, 0.0f};
+    const Hit hit = tracer.intersect(ray);
+    EXPECT_EQ(hit.primitive, 20000u);
+    EXPECT_EQ(hit.t, 20007.0f);
+    EXPECT_TRUE(tracer.occluded(ray));
+}
+
+INSTANTIATE_TEST_SUITE_P(All, PerBuilder, ::testing::ValuesIn(builder_names()), plain_name);
+INSTANTIATE_TEST_SUITE_P(Object, ObjectBuilder, ::testing::Values("cbvh", "binned"), plain_name);

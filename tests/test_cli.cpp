@@ -1,0 +1,333 @@
+// The `spacebvh` command-line tool (apps/spacebvh), run as a separate process in a temporary
+// directory: help, every subcommand on a builtin scene, the files it writes (JSON, ray and hit files,
+// PNG), and clean failures (exit code 1 or 2 with a message naming the problem, never a crash).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/rays.hpp"
+#include "spacebvh/tracer.hpp"
+#include "spacebvh/verify.hpp"
+
+using namespace spacebvh;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliResult {
+    int exit_code = -1;  // 128 + N when killed by signal N
+    std::string output;  // stdout and stderr together
+    bool crashed() const { return exit_code >= 128 || exit_code < 0; }
+};
+
+// A fresh directory per test, the working directory of every command; removed afterwards.
+class Cli : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = fs::temp_directory_path() /
+               ("spacebvh_cli_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    // Runs `spacebvh ARGS` in the test directory, capturing stdout and stderr.
+    CliResult run(const std::string& args) const {
+        const std::string command =
+            "cd '" + dir_.string() + "' && '" + std::string(SPACEBVH_CLI_PATH) + "' " + args + " 2>&1";
+        CliResult result;
+        FILE* pipe = popen(command.c_str(), "r");
+        if (!pipe) return result;
+        std::array<char, 4096> buffer;
+        size_t n;
+        while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
+        const int status = pclose(pipe);
+        if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+        else if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+        return result;
+    }
+
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+    void write(const std::string& name, const std::string& bytes) const {
+        std::ofstream(dir_ / name, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    }
+
+    std::string read(const std::string& name) const {
+        std::ifstream in(dir_ / name, std::ios::binary);
+        return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    }
+
+    nlohmann::json read_json(const std::string& name) const { return nlohmann::json::parse(read(name)); }
+
+    // A failing command: exit code 1 or 2 (not 0, not a crash), and the output names the problem.
+    void expect_clean_failure(const std::string& args, const std::vector<std::string>& mentions) const {
+        SCOPED_TRACE("spacebvh " + args);
+        const CliResult r = run(args);
+        EXPECT_TRUE(r.exit_code == 1 || r.exit_code == 2) << "exit code " << r.exit_code << ", output:\n" << r.output;
+        EXPECT_FALSE(r.crashed()) << r.output;
+        EXPECT_FALSE(r.output.empty());
+        for (const std::string& word : mentions)
+            EXPECT_NE(r.output.find(word), std::string::npos) << "no '" << word << "' in:\n" << r.output;
+        EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+    }
+
+    fs::path dir_;
+};
+
+const char* kSubcommands[] = {"info", "build", "rays", "trace", "render", "compare"};
+
+bool has_png_signature(const std::string& bytes) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    return bytes.size() > 33 && std::equal(signature, signature + 8, reinterpret_cast<const unsigned char*>(bytes.data()));
+}
+
+// Width and height from the IHDR chunk (big-endian, right after the signature and chunk header).
+std::pair<uint32_t, uint32_t> png_size(const std::string& bytes) {
+    auto be32 = [&](size_t at) {
+        const auto* p = reinterpret_cast<const unsigned char*>(bytes.data()) + at;
+        return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | uint32_t(p[3]);
+    };
+    if (bytes.size() < 24 || bytes.compare(12, 4, "IHDR") != 0) return {0, 0};
+    return {be32(16), be32(20)};
+}
+
+}  // namespace
+
+// --help and every subcommand's --help succeed and describe the tool.
+TEST_F(Cli, HelpForTheToolAndEverySubcommand) {
+    const CliResult top = run("--help");
+    EXPECT_EQ(top.exit_code, 0) << top.output;
+    for (const char* sub : kSubcommands) EXPECT_NE(top.output.find(sub), std::string::npos) << sub;
+    for (const char* sub : kSubcommands) {
+        const CliResult r = run(std::string(sub) + " --help");
+        EXPECT_EQ(r.exit_code, 0) << sub << ":\n" << r.output;
+        EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub << ":\n" << r.output;
+    }
+    // The build help lists every builder.
+    const CliResult build_help = run("build --help");
+    for (const std::string& name : builder_names()) EXPECT_NE(build_help.output.find(name), std::string::npos) << name;
+}
+
+// `info` prints the scene's triangle count, and its JSON says the same.
+TEST_F(Cli, InfoOnABuiltinScene) {
+    const CliResult r = run("info builtin:soup --json info.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("30000"), std::string::npos) << r.output;
+    const nlohmann::json json = read_json("info.json");
+    EXPECT_EQ(json["triangles"], 30000);
+    EXPECT_EQ(json["scene"], "soup");
+    EXPECT_GT(json["diagonal"].get<double>(), 0.0);
+}
+
+// `build --json` writes the tree's metrics, consistent with each other and with the scene.
+TEST_F(Cli, BuildWritesConsistentJson) {
+    const CliResult r = run("build builtin:soup --builder cbvh --json out.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json json = read_json("out.json");
+    EXPECT_EQ(json["scene"], "soup");
+    EXPECT_EQ(json["triangles"], 30000);
+    EXPECT_EQ(json["builder"], "cbvh");
+    const size_t nodes = json["nodes"], leaves = json["leaves"];
+    EXPECT_EQ(nodes, 2 * leaves - 1);
+    EXPECT_EQ(json["references"], 30000);  // cbvh partitions objects: one reference per triangle
+    EXPECT_EQ(json["distinct_primitives"], 30000);
+    EXPECT_GT(json["max_depth"].get<int>(), 5);
+    EXPECT_GT(json["sah"].get<double>(), 0.0);
+    EXPECT_GE(json["epo"].get<double>(), 0.0);
+    EXPECT_GT(json["bytes"].get<double>(), 0.0);
+    EXPECT_GT(json["layout_bytes"].get<double>(), 0.0);
+    EXPECT_EQ(json["cost"]["C_T"], 1.0);
+    EXPECT_EQ(json["cost"]["C_I"], 1.0);
+    // The same tree built in-process gives the same node count.
+    const Scene scene = load_scene("builtin:soup");
+    EXPECT_EQ(nodes, build_bvh(scene, options_for("cbvh")).nodes.size());
+}
+
+// The overlap penalty is reported as a number (or "inf"), not as the whole cost description.
+TEST_F(Cli, BuildJsonReportsTheOverlapPenaltyItself) {
+    ASSERT_EQ(run("build builtin:soup --builder binned --no-epo --co 0.5 --json half.json").exit_code, 0);
+    const nlohmann::json half = read_json("half.json");
+    ASSERT_TRUE(half["cost"].contains("C_o"));
+    EXPECT_TRUE(half["cost"]["C_o"].is_number()) << half["cost"]["C_o"];
+    if (half["cost"]["C_o"].is_number()) {
+        EXPECT_EQ(half["cost"]["C_o"].get<double>(), 0.5);
+    }
+    ASSERT_EQ(run("build builtin:soup --builder binned --no-epo --co inf --json inf.json").exit_code, 0);
+    const nlohmann::json inf = read_json("inf.json");
+    EXPECT_TRUE(inf["cost"]["C_o"] == "inf" || inf["cost"]["C_o"].is_null()) << inf["cost"]["C_o"];
+}
+
+// `rays` writes the spec's random rays; `trace` answers them (closest hit and occlusion) as the
+// arbiter does, and as the library does in-process.
+TEST_F(Cli, RaysThenTraceMatchTheArbiter) {
+    CliResult r = run("rays builtin:soup --kind random --count 1000 -o r.bin");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const Scene scene = load_scene("builtin:soup");
+    const std::vector<Ray> rays = read_ray_file(path("r.bin"));
+    const std::vector<Ray> expected = generate_random_rays(scene.bounds(), 1000, 1);
+    ASSERT_EQ(rays.size(), 1000u);
+    EXPECT_EQ(std::memcmp(rays.data(), expected.data(), rays.size() * sizeof(Ray)), 0);
+
+    r = run("trace builtin:soup --rays r.bin --hits h.bin");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = run("trace builtin:soup --rays r.bin --hits o.bin --occlusion --stats --json t.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::vector<HitRecord> hits = read_hit_file(path("h.bin"));
+    const std::vector<HitRecord> occlusion = read_hit_file(path("o.bin"));
+    ASSERT_EQ(hits.size(), rays.size());
+    ASSERT_EQ(occlusion.size(), rays.size());
+
+    const float diagonal = scene.diagonal();
+    size_t wrong = 0, hit_count = 0;
+    for (size_t i = 0; i < 200; ++i) {
+        const HitRecord truth = arbiter_closest_hit(scene, rays[i]);
+        hit_count += truth.is_hit();
+        wrong += !hits_agree(hits[i], truth, rays[i], diagonal);
+        wrong += !hits_agree(occlusion[i], arbiter_occlusion(scene, rays[i]), rays[i], diagonal);
+        wrong += occlusion[i].is_hit() && occlusion[i].t != 0.0f;  // occluded: t = 0
+    }
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_GT(hit_count, 20u);
+
+    // All 1000 records equal the library's own answers with the default builder.
+    const BinaryTracer tracer(scene, build_bvh(scene, BuildOptions{}));
+    size_t different = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const HitRecord mine = to_record(tracer.intersect(rays[i]));
+        different += mine.t != hits[i].t || mine.primitive != hits[i].primitive;
+        different += tracer.occluded(rays[i]) != occlusion[i].is_hit();
+    }
+    EXPECT_EQ(different, 0u);
+    const nlohmann::json json = read_json("t.json");
+    EXPECT_EQ(json["rays"], 1000);
+    EXPECT_GT(json["nodes_per_ray"].get<double>(), 0.0);
+}
+
+// Primary and diffuse ray files have the expected counts.
+TEST_F(Cli, PrimaryAndDiffuseRays) {
+    ASSERT_EQ(run("rays builtin:interior --kind primary --width 32 --height 24 -o p.bin").exit_code, 0);
+    const Scene scene = load_scene("builtin:interior");
+    const std::vector<Ray> primary = read_ray_file(path("p.bin"));
+    const std::vector<Ray> expected = generate_primary_rays(camera_for_scene(scene, "builtin:interior", {}), 32, 24);
+    ASSERT_EQ(primary.size(), 768u);
+    EXPECT_EQ(std::memcmp(primary.data(), expected.data(), primary.size() * sizeof(Ray)), 0);
+    const CliResult r = run("rays builtin:interior --kind diffuse --width 32 --height 24 -o d.bin");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::vector<Ray> diffuse = read_ray_file(path("d.bin"));
+    EXPECT_GT(diffuse.size(), 700u);  // inside the hall almost every primary ray hits
+    EXPECT_LE(diffuse.size(), 768u);
+}
+
+// `render` writes PNG files of the requested size, shaded and as a heat map (with its legend below).
+TEST_F(Cli, RenderWritesPngFiles) {
+    CliResult r = run("render builtin:soup -o a.png --width 64 --height 48");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string shaded = read("a.png");
+    ASSERT_TRUE(has_png_signature(shaded));
+    EXPECT_EQ(png_size(shaded), std::make_pair(64u, 48u));
+
+    r = run("render builtin:soup -o h.png --width 64 --height 48 --heatmap");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string heat = read("h.png");
+    ASSERT_TRUE(has_png_signature(heat));
+    const auto [width, height] = png_size(heat);
+    EXPECT_EQ(width, 64u);
+    EXPECT_GE(height, 48u);
+    EXPECT_NE(shaded, heat);
+}
+
+// `compare` runs every row on a small ray set; our builders and Embree answer without a wrong ray.
+TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
+    // --no-epo: EPO costs seconds per builder on the soup (BuildWritesConsistentJson covers it).
+    const CliResult r =
+        run("compare builtin:soup --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo --json c.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json json = read_json("c.json");
+    ASSERT_EQ(json["scenes"].size(), 1u);
+    const nlohmann::json& scene = json["scenes"][0];
+    EXPECT_EQ(scene["triangles"], 30000);
+    EXPECT_EQ(scene["rays"]["random"], 2000);
+    EXPECT_EQ(scene["rays"]["primary"], 1024);
+    // Row names may carry details after the name ("cbvh (C_o=0.00)"): match by prefix.
+    auto find_row = [&](const std::string& name) -> const nlohmann::json* {
+        for (const nlohmann::json& row : scene["rows"]) {
+            const std::string label = row["builder"];
+            if (label == name || label.rfind(name + " ", 0) == 0 || label.rfind(name + "@", 0) == 0) return &row;
+        }
+        return nullptr;
+    };
+    for (const char* name : {"cbvh", "binned", "embree-low", "embree-medium", "embree-high"}) {
+        const nlohmann::json* row = find_row(name);
+        ASSERT_NE(row, nullptr) << "no row for " << name << " in " << scene["rows"].dump();
+        for (const char* kind : {"random", "primary", "diffuse"}) {
+            ASSERT_TRUE((*row)[kind].contains("wrong")) << name << " " << kind;
+            if (std::string(name).rfind("embree-", 0) != 0) {
+                EXPECT_EQ((*row)[kind]["wrong"], 0) << name << " " << kind;
+                EXPECT_GT((*row)[kind]["nodes_per_ray"].get<double>(), 0.0) << name << " " << kind;
+            }
+            EXPECT_GT((*row)[kind]["closest_mrays"].get<double>(), 0.0) << name << " " << kind;
+        }
+    }
+}
+
+// Bad input fails cleanly with a message naming the problem.
+TEST_F(Cli, BadInputFailsCleanly) {
+    expect_clean_failure("info does_not_exist.obj", {"does_not_exist.obj"});
+    expect_clean_failure("info builtin:nope", {"nope"});
+    expect_clean_failure("build builtin:soup --builder nope --no-epo", {"nope"});
+    expect_clean_failure("build builtin:soup --co -1 --no-epo", {"C_o"});
+    expect_clean_failure("build builtin:soup --co abc --no-epo", {"abc"});
+    expect_clean_failure("build builtin:soup --bins 1 --no-epo", {"bins"});
+    expect_clean_failure("build builtin:soup --max-leaf 0 --no-epo", {"leaf"});
+    expect_clean_failure("build builtin:soup --max-depth 5000 --no-epo", {"depth"});
+    expect_clean_failure("info builtin:soup --rotate x:abc", {"x:abc"});
+    expect_clean_failure("info builtin:soup --rotate q:45", {"q"});
+    expect_clean_failure("render builtin:soup -o x.png --width 0 --height 10", {"width"});
+    expect_clean_failure("rays builtin:soup --kind sideways -o r.bin", {"sideways"});
+
+    // A ray file cut off inside a record.
+    ASSERT_EQ(run("rays builtin:soup --count 10 -o r.bin").exit_code, 0);
+    write("truncated.bin", read("r.bin").substr(0, 100));
+    expect_clean_failure("trace builtin:soup --rays truncated.bin --hits h.bin", {"truncated.bin"});
+    expect_clean_failure("trace builtin:soup --rays missing.bin --hits h.bin", {"missing.bin"});
+    // An OBJ file with a NaN coordinate, and one with a face index out of range.
+    write("nan.obj", "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n");
+    expect_clean_failure("info nan.obj", {"nan.obj", "2"});
+    expect_clean_failure("build nan.obj --no-epo", {"nan.obj"});
+    write("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+    expect_clean_failure("info bad_index.obj", {"bad_index.obj"});
+    // An unwritable output path.
+    expect_clean_failure("rays builtin:soup --count 10 -o no_such_dir/r.bin", {"no_such_dir"});
+}
+
+// Usage errors (unknown option, missing argument, unconvertible number) also exit with 1 or 2.
+TEST_F(Cli, UsageErrorsExitWithOneOrTwo) {
+    expect_clean_failure("build builtin:soup --bogus", {"--bogus"});
+    expect_clean_failure("build", {"scene"});
+    expect_clean_failure("", {"subcommand"});
+    expect_clean_failure("build builtin:soup --max-leaf -1", {"max-leaf"});
+    expect_clean_failure("frobnicate", {"frobnicate"});
+}
+
+// --threads 0 means all cores; explicit thread counts work too.
+TEST_F(Cli, ThreadOptions) {
+    for (const char* threads : {"0", "1", "2"}) {
+        const CliResult r = run(std::string("build builtin:soup --no-epo --threads ") + threads);
+        EXPECT_EQ(r.exit_code, 0) << threads << ":\n" << r.output;
+        EXPECT_NE(r.output.find("nodes"), std::string::npos) << r.output;
+    }
+}
