@@ -4,7 +4,8 @@
 # kernel (Embree's own binary trees included), Embree 3's own kernel as rows, and every answer
 # checked against Embree with the exact arbiter settling disagreements ("wrong"). Then the C_o sweep
 # of the `spatial` builder on crytek_sponza and its rotated variant.
-# Usage: bash bench/compare_shared_scenes.sh > bench/RESULTS-raw.md   (build first: scripts/build.sh)
+# Usage: bash bench/compare_shared_scenes.sh > raw.md   (build first: scripts/build.sh). bench/RESULTS.md
+# is a summary of the goals measured in that output, followed by the raw tables.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=../shared/scenes

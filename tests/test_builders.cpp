@@ -3,6 +3,8 @@
 // determinism across thread counts, the build options, and edge-case scenes.
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -177,21 +179,8 @@ std::string loose_boxes(const Scene& scene, const Bvh& bvh) {
 // ---------------------------------------------------------------------------------------------------
 // Answers.
 
-std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
-    std::vector<Hit> hits(rays.size());
-    tracer.intersect(rays, hits);
-    std::vector<HitRecord> records(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i) records[i] = to_record(hits[i]);
-    return records;
-}
-
-std::vector<HitRecord> occlusion_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
-    std::vector<uint8_t> occluded(rays.size());
-    tracer.occluded(rays, occluded);
-    std::vector<HitRecord> records(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
-    return records;
-}
+using testing_support::closest_records;
+using testing_support::occlusion_records;
 
 // Brute-force truth for a few rays, in parallel.
 void arbiter_records(const Scene& scene, std::span<const Ray> rays, std::vector<HitRecord>& closest,

@@ -2,6 +2,8 @@
 // reference budget, answers of our tracer over them, and tree quality.
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -106,21 +108,8 @@ std::string check_structure(const Scene& scene, const Bvh& bvh, uint32_t max_lea
     return "";
 }
 
-std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
-    std::vector<Hit> hits(rays.size());
-    tracer.intersect(rays, hits);
-    std::vector<HitRecord> records(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i) records[i] = to_record(hits[i]);
-    return records;
-}
-
-std::vector<HitRecord> occlusion_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
-    std::vector<uint8_t> occluded(rays.size());
-    tracer.occluded(rays, occluded);
-    std::vector<HitRecord> records(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
-    return records;
-}
+using testing_support::closest_records;
+using testing_support::occlusion_records;
 
 }  // namespace
 
