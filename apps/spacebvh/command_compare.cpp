@@ -108,7 +108,7 @@ std::string number_or_dash(std::optional<double> value, int precision) {
 void add_compare_command(CLI::App& app) {
     struct Options {
         std::vector<std::string> sources;
-        std::string builders = "cbvh,binned";
+        std::string builders = "cbvh,binned,kdbvh,spatial,sbvh";
         std::string embree = "low,medium,high";
         int runs = 5, build_runs = 3;
         size_t random_count = 1000000;
