@@ -158,26 +158,6 @@ bool build_progress(void* user, double fraction) {
     }
 }
 
-const char* error_name(RTCError code) {
-    switch (code) {
-        case RTC_ERROR_NONE: return "none";
-        case RTC_ERROR_UNKNOWN: return "unknown error";
-        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-        case RTC_ERROR_CANCELLED: return "cancelled";
-    }
-    return "error";
-}
-
-// Throws Error if the last Embree call on this thread failed. (The device's error callback, set up
-// by embree_device(), keeps Embree's message to itself; the code says enough here.)
-void check_embree(RTCDevice device, const char* what) {
-    const RTCError code = rtcGetDeviceError(device);
-    if (code != RTC_ERROR_NONE) throw Error(std::string("Embree: ") + what + " failed: " + error_name(code));
-}
-
 // Owns the RTCBVH (and with it every temporary node).
 struct BvhHandle {
     RTCBVH bvh = nullptr;

@@ -46,15 +46,6 @@ const char* error_name(RTCError code) {
     return "error";
 }
 
-// Throws Error if the last Embree call on this thread failed.
-void check_embree(RTCDevice device, const char* what) {
-    const RTCError code = rtcGetDeviceError(device);
-    if (code == RTC_ERROR_NONE) return;
-    std::string message = std::string("Embree: ") + what + " failed: " + error_name(code);
-    if (!t_last_embree_message.empty()) message += " (" + t_last_embree_message + ")";
-    t_last_embree_message.clear();
-    throw Error(message);
-}
 
 constexpr size_t kChunkRays = 1024;  // as embree-measured.md: oneTBB chunks of 1024 rays
 
@@ -112,6 +103,16 @@ void set_lane(RTCRay16& p, int i, const Ray& ray) {
 }
 
 }  // namespace
+
+// Throws Error if the last Embree call on this thread failed.
+void check_embree(RTCDevice device, const char* what) {
+    const RTCError code = rtcGetDeviceError(device);
+    if (code == RTC_ERROR_NONE) return;
+    std::string message = std::string("Embree: ") + what + " failed: " + error_name(code);
+    if (!t_last_embree_message.empty()) message += " (" + t_last_embree_message + ")";
+    t_last_embree_message.clear();
+    throw Error(message);
+}
 
 const char* to_string(EmbreeQuality quality) {
     switch (quality) {

@@ -27,6 +27,9 @@ EmbreeQuality parse_embree_quality(const std::string& text);  // "low", "medium"
 // tasks with oneTBB in the caller's arena, like our builders. Errors reported by Embree become Error.
 RTCDevice embree_device();
 
+// Throws Error if the last Embree call on this thread failed, with Embree's own message.
+void check_embree(RTCDevice device, const char* what);
+
 // One static Embree scene holding a single triangle geometry: primID = our triangle index in file
 // order. Degenerate triangles are handed to Embree as they are (it skips them itself).
 //
