@@ -2,6 +2,8 @@
 // colour ramp, and PNG output.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -130,6 +132,24 @@ TEST(Render, WritesPngAndReportsErrors) {
     HeatmapOptions bad;
     bad.percentile = 0.0;
     EXPECT_THROW(render_heatmap(t.scene, tracer, t.camera, 8, 8, nullptr, bad), Error);
+}
+
+// A fixed colour scale (--scale-max) is used as given, so heat maps of two trees share one scale;
+// a negative or infinite one is refused.
+TEST(Render, HeatmapFixedScaleIsHonoured) {
+    TinyScene t;
+    const BinaryTracer tracer(t.scene, t.bvh);
+    HeatmapOptions fixed;
+    fixed.scale_max = 1000.0;
+    HeatmapInfo info;
+    render_heatmap(t.scene, tracer, t.camera, 32, 24, &info, fixed);
+    EXPECT_EQ(info.scale_max, 1000.0);
+    HeatmapOptions negative;
+    negative.scale_max = -1.0;
+    EXPECT_THROW(render_heatmap(t.scene, tracer, t.camera, 8, 8, nullptr, negative), Error);
+    HeatmapOptions infinite;
+    infinite.scale_max = std::numeric_limits<double>::infinity();
+    EXPECT_THROW(render_heatmap(t.scene, tracer, t.camera, 8, 8, nullptr, infinite), Error);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@ void add_render_command(CLI::App& app) {
         std::string source, output;
         bool heatmap = false;
         std::string quantity = "work";
+        double scale_max = 0.0;
         SceneOptions scene;
         BuildCliOptions build;
         CameraOptions camera;
@@ -23,6 +24,8 @@ void add_render_command(CLI::App& app) {
     command->add_flag("--heatmap", options->heatmap, "colour pixels by traversal cost, with a colour legend");
     command->add_option("--quantity", options->quantity, "heat map quantity: work (nodes + triangles), nodes, triangles")
         ->capture_default_str();
+    command->add_option("--scale-max", options->scale_max,
+                        "fixed top of the heat map's colour scale (default: the 99th percentile of this picture)");
     options->scene.add_to(*command);
     options->build.add_to(*command);
     options->camera.add_to(*command);
@@ -42,6 +45,7 @@ void add_render_command(CLI::App& app) {
             return;
         }
         HeatmapOptions heatmap;
+        heatmap.scale_max = options->scale_max;
         if (options->quantity == "work") heatmap.quantity = HeatmapQuantity::work;
         else if (options->quantity == "nodes") heatmap.quantity = HeatmapQuantity::nodes_visited;
         else if (options->quantity == "triangles") heatmap.quantity = HeatmapQuantity::triangles_tested;

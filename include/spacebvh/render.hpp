@@ -49,6 +49,9 @@ struct HeatmapOptions {
     // The top of the colour ramp is this percentile of the per-pixel values (nearest rank), so that
     // a few extreme pixels do not wash out the picture; 1 = the maximum. Must be in (0, 1].
     double percentile = 0.99;
+    // A fixed top of the colour ramp instead (> 0), so that heat maps of several trees share one
+    // scale; 0 = from the percentile.
+    double scale_max = 0.0;
     // Appends a legend strip below the width x height picture: the colour ramp with tick labels.
     bool legend = true;
 };

@@ -222,6 +222,8 @@ Image render_heatmap(const Scene& scene, const BinaryTracer& tracer, const Camer
     if (!(options.percentile > 0.0 && options.percentile <= 1.0)) {
         throw Error("render_heatmap: percentile must be in (0, 1], got " + std::to_string(options.percentile));
     }
+    if (!(options.scale_max >= 0.0) || std::isinf(options.scale_max))
+        throw Error("render_heatmap: scale_max must be finite and >= 0, got " + std::to_string(options.scale_max));
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
     const size_t pixels = rays.size();
     std::vector<TraversalStats> per_pixel(pixels);
@@ -244,7 +246,9 @@ Image render_heatmap(const Scene& scene, const BinaryTracer& tracer, const Camer
         sum += double(values[i]);
     }
     result.mean_value = sum / double(pixels);
-    {
+    if (options.scale_max > 0.0) {
+        result.scale_max = options.scale_max;  // fixed, so pictures of several trees compare directly
+    } else {
         // Nearest-rank percentile: the smallest value with at least percentile * N values <= it.
         std::vector<uint64_t> sorted = values;
         size_t rank = size_t(std::ceil(options.percentile * double(pixels)));
