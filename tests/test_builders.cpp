@@ -253,14 +253,7 @@ struct SceneCase {
 
 const char* kKindNames[3] = {"random", "primary", "diffuse"};
 
-const Scene& builtin(const std::string& name) {
-    static std::mutex mutex;
-    static std::map<std::string, std::unique_ptr<Scene>> cache;
-    std::lock_guard lock(mutex);
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<Scene>(load_scene("builtin:" + name));
-    return *slot;
-}
+const Scene& builtin(const std::string& name) { return testing_support::cached_builtin_scene(name); }
 
 const SceneCase& scene_case(const std::string& name) {
     static std::mutex mutex;

@@ -33,14 +33,7 @@ BuildOptions embree_options() {
     return options;
 }
 
-const Scene& builtin_scene(const std::string& name) {
-    static std::mutex mutex;
-    static std::map<std::string, std::unique_ptr<Scene>> cache;
-    std::lock_guard lock(mutex);
-    auto& slot = cache[name];
-    if (!slot) slot = std::make_unique<Scene>(load_scene("builtin:" + name));
-    return *slot;
-}
+const Scene& builtin_scene(const std::string& name) { return testing_support::cached_builtin_scene(name); }
 
 // One tree per scene and quality, built once per process (Embree's HIGH build is the slow part).
 const Bvh& embree_tree(const std::string& name, EmbreeQuality quality) {

@@ -1,13 +1,39 @@
 // Helpers shared by the test files: our answers as hit-file records, ready for verify_against_reference.
 #pragma once
 
+#include <map>
+#include <memory>
+#include <mutex>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "spacebvh/rays.hpp"
+#include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
 
 namespace spacebvh::testing_support {
+
+// `builtin:NAME`, loaded once per test process (thread-safe).
+inline const Scene& cached_builtin_scene(const std::string& name) {
+    static std::mutex mutex;
+    static std::map<std::string, std::unique_ptr<Scene>> cache;
+    std::lock_guard lock(mutex);
+    auto& slot = cache[name];
+    if (!slot) slot = std::make_unique<Scene>(load_scene("builtin:" + name));
+    return *slot;
+}
+
+// Two unit squares at z = 0 (triangles 0, 1) and z = -1 (triangles 2, 3).
+inline Scene two_floors() {
+    Scene scene;
+    scene.name = "two_floors";
+    for (float z : {0.0f, -1.0f}) {
+        scene.triangles.push_back({{0, 0, z}, {1, 0, z}, {1, 1, z}});
+        scene.triangles.push_back({{0, 0, z}, {1, 1, z}, {0, 1, z}});
+    }
+    return scene;
+}
 
 inline std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
     std::vector<Hit> hits(rays.size());

@@ -4,6 +4,8 @@
 // ../shared/spec/rays.md where a brute-force answer is affordable.
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -415,16 +417,7 @@ TEST(Tracer, RayInTheSlabPlaneOfAFlatNode) {
 
 namespace {
 
-// Two unit squares at z = 0 (triangles 0, 1) and z = -1 (2, 3).
-Scene two_floors() {
-    Scene scene;
-    scene.name = "two_floors";
-    for (float z : {0.0f, -1.0f}) {
-        scene.triangles.push_back({{0, 0, z}, {1, 0, z}, {1, 1, z}});
-        scene.triangles.push_back({{0, 0, z}, {1, 1, z}, {0, 1, z}});
-    }
-    return scene;
-}
+using testing_support::two_floors;  // two unit squares at z = 0 (triangles 0, 1) and z = -1 (2, 3)
 
 }  // namespace
 

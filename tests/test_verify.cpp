@@ -1,6 +1,8 @@
 // The exact arbiter and the agreement rule of ../shared/spec/rays.md.
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <cmath>
 #include <vector>
 
@@ -171,12 +173,7 @@ namespace {
 // Two unit squares, at z = 0 (triangles 0, 1) and z = -1 (triangles 2, 3), a degenerate
 // triangle (4) and a duplicate of triangle 0 (5).
 Scene two_floors() {
-    Scene scene;
-    scene.name = "two_floors";
-    for (float z : {0.0f, -1.0f}) {
-        scene.triangles.push_back({{0, 0, z}, {1, 0, z}, {1, 1, z}});
-        scene.triangles.push_back({{0, 0, z}, {1, 1, z}, {0, 1, z}});
-    }
+    Scene scene = testing_support::two_floors();
     scene.triangles.push_back({{0, 0, 0.5f}, {1, 1, 0.5f}, {2, 2, 0.5f}});
     scene.triangles.push_back(scene.triangles[0]);
     scene.degenerate_count = 1;

@@ -12,13 +12,6 @@
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::cli {
-namespace {
-bool builder_names_contains(const std::string& name) {
-    for (const auto& known : builder_names())
-        if (known == name) return true;
-    return false;
-}
-}  // namespace
 
 void SceneOptions::add_to(CLI::App& command) {
     command.add_option("--rotate", rotate, "rotate every vertex at load time, degrees: x:45,y:45,z:45 (R = Rz*Ry*Rx)");
@@ -144,10 +137,9 @@ std::function<void(double)> Progress::callback() {
 bool is_embree_tree(const std::string& builder) { return builder == "embree-medium" || builder == "embree-high"; }
 
 Bvh build_tree(const Scene& scene, const BuildOptions& options) {
-    if (builder_names_contains(options.builder)) return build_bvh(scene, options);
     if (options.builder == "embree-medium") return build_bvh_with_embree(scene, EmbreeQuality::medium, options);
     if (options.builder == "embree-high") return build_bvh_with_embree(scene, EmbreeQuality::high, options);
-    return build_bvh(scene, options);  // reports the unknown name
+    return build_bvh(scene, options);  // our presets; reports an unknown name
 }
 
 std::string builder_list() {
