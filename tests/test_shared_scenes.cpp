@@ -18,6 +18,7 @@
 #include "spacebvh/rays.hpp"
 #include "spacebvh/tracer.hpp"
 #include "spacebvh/verify.hpp"
+#include "test_support.hpp"
 
 using namespace spacebvh;
 
@@ -111,7 +112,8 @@ std::string scene_name(const ::testing::TestParamInfo<SharedScene>& info) { retu
 
 }  // namespace
 
-// Our closest hits and occlusion answers are never wrong; Embree's wrong answers are reported.
+// Our closest hits and occlusion answers are never wrong, with any kernel; Embree's wrong answers are
+// reported.
 TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
     const auto& [shared, builder] = GetParam();
     if (!std::filesystem::exists(scene_path(shared))) GTEST_SKIP() << "shared scene not found: " << scene_path(shared);
@@ -119,34 +121,31 @@ TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
     const Case c = load_case(shared);
     const BuildOptions options = options_for(builder);
     const Bvh bvh = build_bvh(c.scene, options);
-    const BinaryTracer tracer(c.scene, bvh);
-    for (int k = 0; k < 3; ++k) {
-        SCOPED_TRACE(std::string(kKindNames[k]) + " rays");
-        const auto& rays = c.rays[k];
-        EXPECT_GE(rays.size(), k == 2 ? 1000u : 20000u);
-        std::vector<Hit> hits(rays.size());
-        std::vector<uint8_t> occluded(rays.size());
-        tracer.intersect(rays, hits);
-        tracer.occluded(rays, occluded);
-        std::vector<HitRecord> closest(rays.size()), occlusion(rays.size());
-        for (size_t i = 0; i < rays.size(); ++i) {
-            closest[i] = to_record(hits[i]);
-            occlusion[i] = occlusion_record(occluded[i]);
+    // Every kernel family on the same tree: the binary reference, both wide layouts and packets.
+    for (const char* kernel : {"binary", "bvh4", "bvh8", "packet8"}) {
+        const std::unique_ptr<Tracer> tracer = make_tracer(kernel, c.scene, bvh);
+        for (int k = 0; k < 3; ++k) {
+            SCOPED_TRACE(tracer->name() + ", " + kKindNames[k] + " rays");
+            const auto& rays = c.rays[k];
+            EXPECT_GE(rays.size(), k == 2 ? 1000u : 20000u);
+            const std::vector<HitRecord> closest = testing_support::closest_records(*tracer, rays);
+            const std::vector<HitRecord> occlusion = testing_support::occlusion_records(*tracer, rays);
+            const VerificationReport closest_report =
+                verify_against_reference(c.scene, rays, closest, c.embree_closest[k], false);
+            const VerificationReport occlusion_report =
+                verify_against_reference(c.scene, rays, occlusion, c.embree_occlusion[k], true);
+            EXPECT_EQ(closest_report.ours_wrong, 0u)
+                << "closest hit; first wrong ray " << (closest_report.wrong_rays.empty() ? 0 : closest_report.wrong_rays[0]);
+            EXPECT_EQ(occlusion_report.ours_wrong, 0u)
+                << "occlusion; first wrong ray "
+                << (occlusion_report.wrong_rays.empty() ? 0 : occlusion_report.wrong_rays[0]);
+            if (std::string(kernel) != "binary") continue;
+            RecordProperty(std::string("embree_wrong_") + kKindNames[k],
+                           std::to_string(closest_report.reference_wrong + occlusion_report.reference_wrong));
+            std::printf("[ info ] %s, %s, %s rays: %zu rays, Embree medium wrong on %zu closest + %zu occlusion, ours %zu + %zu\n",
+                        shared.key, builder.c_str(), kKindNames[k], rays.size(), closest_report.reference_wrong,
+                        occlusion_report.reference_wrong, closest_report.ours_wrong, occlusion_report.ours_wrong);
         }
-        const VerificationReport closest_report =
-            verify_against_reference(c.scene, rays, closest, c.embree_closest[k], false);
-        const VerificationReport occlusion_report =
-            verify_against_reference(c.scene, rays, occlusion, c.embree_occlusion[k], true);
-        EXPECT_EQ(closest_report.ours_wrong, 0u)
-            << "closest hit; first wrong ray " << (closest_report.wrong_rays.empty() ? 0 : closest_report.wrong_rays[0]);
-        EXPECT_EQ(occlusion_report.ours_wrong, 0u)
-            << "occlusion; first wrong ray "
-            << (occlusion_report.wrong_rays.empty() ? 0 : occlusion_report.wrong_rays[0]);
-        RecordProperty(std::string("embree_wrong_") + kKindNames[k],
-                       std::to_string(closest_report.reference_wrong + occlusion_report.reference_wrong));
-        std::printf("[ info ] %s, %s, %s rays: %zu rays, Embree medium wrong on %zu closest + %zu occlusion, ours %zu + %zu\n",
-                    shared.key, builder.c_str(), kKindNames[k], rays.size(), closest_report.reference_wrong,
-                    occlusion_report.reference_wrong, closest_report.ours_wrong, occlusion_report.ours_wrong);
     }
 }
 

@@ -35,7 +35,7 @@ inline Scene two_floors() {
     return scene;
 }
 
-inline std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
+inline std::vector<HitRecord> closest_records(const Tracer& tracer, std::span<const Ray> rays) {
     std::vector<Hit> hits(rays.size());
     tracer.intersect(rays, hits);
     std::vector<HitRecord> records(rays.size());
@@ -43,7 +43,7 @@ inline std::vector<HitRecord> closest_records(const BinaryTracer& tracer, std::s
     return records;
 }
 
-inline std::vector<HitRecord> occlusion_records(const BinaryTracer& tracer, std::span<const Ray> rays) {
+inline std::vector<HitRecord> occlusion_records(const Tracer& tracer, std::span<const Ray> rays) {
     std::vector<uint8_t> occluded(rays.size());
     tracer.occluded(rays, occluded);
     std::vector<HitRecord> records(rays.size());

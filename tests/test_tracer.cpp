@@ -22,6 +22,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/rays.hpp"
 #include "spacebvh/tracer.hpp"
+#include "spacebvh/wide_tracer.hpp"
 #include "spacebvh/verify.hpp"
 
 using namespace spacebvh;
@@ -145,7 +146,7 @@ IndexedMesh sliver_spindle(int segments) {
 // arbiter agrees.) Returns a description of failures.
 std::string rays_escaping(const std::vector<Vec3>& vertices,
                           const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<Vec3>& inside,
-                          const BinaryTracer& tracer, size_t* ray_count = nullptr) {
+                          const Tracer& tracer, size_t* ray_count = nullptr) {
     std::set<std::pair<uint32_t, uint32_t>> edges;
     for (const auto& f : faces)
         for (int e = 0; e < 3; ++e) edges.insert(std::minmax(f[e], f[(e + 1) % 3]));
@@ -194,27 +195,58 @@ std::string rays_escaping(const std::vector<Vec3>& vertices,
            " rays:" + first.str();
 }
 
-// Closest hit and occlusion of the tracer against the arbiter on every ray; returns a description of
-// disagreements.
-std::string disagreements_with_arbiter(const Scene& scene, const BinaryTracer& tracer, const std::vector<Ray>& rays) {
+// Every kernel make_tracer offers on this CPU, aliases ("auto", "bvh8", ...) left out.
+std::vector<std::string> distinct_kernels() {
+    std::vector<std::string> kernels;
+    for (const std::string& name : kernel_names())
+        if (name.find('-') != std::string::npos || name == "binary") kernels.push_back(name);
+    return kernels;
+}
+
+// The kernels a builder's parametrised tests check: all of them on `spatial` trees (clipped boxes,
+// references shared between leaves), the reference and the default kernel on the others (the suite's
+// time goes to every kernel once, not to every pair).
+std::vector<std::string> kernels_for(const std::string& builder) {
+    if (builder == "spatial") return distinct_kernels();
+    return {"binary", "auto"};
+}
+
+// Closest hit and occlusion of every kernel on `bvh` (single-ray calls and batches) against the
+// arbiter on every ray; returns a description of disagreements.
+std::string disagreements_with_arbiter(const Scene& scene, const Bvh& bvh, const std::vector<Ray>& rays,
+                                       const std::vector<std::string>& kernels = distinct_kernels()) {
     const float diagonal = scene.diagonal();
-    size_t wrong = 0;
-    std::ostringstream text;
+    std::vector<HitRecord> truth(rays.size());
+    std::vector<uint8_t> truth_occluded(rays.size());
     for (size_t i = 0; i < rays.size(); ++i) {
-        const HitRecord truth = arbiter_closest_hit(scene, rays[i]);
-        const HitRecord ours = to_record(tracer.intersect(rays[i]));
-        const bool truth_occluded = arbiter_occlusion(scene, rays[i]).is_hit();
-        const bool ours_occluded = tracer.occluded(rays[i]);
-        if (hits_agree(ours, truth, rays[i], diagonal) && ours_occluded == truth_occluded) continue;
-        if (wrong++ < 4)
-            text << " ray " << i << " org (" << rays[i].org.x << ", " << rays[i].org.y << ", " << rays[i].org.z
-                 << ") dir (" << rays[i].dir.x << ", " << rays[i].dir.y << ", " << rays[i].dir.z << ") ["
-                 << rays[i].tmin << ", " << rays[i].tmax << "]: ours t=" << ours.t << " prim=" << ours.primitive
-                 << " occl=" << ours_occluded << ", arbiter t=" << truth.t << " prim=" << truth.primitive
-                 << " occl=" << truth_occluded << ";";
+        truth[i] = arbiter_closest_hit(scene, rays[i]);
+        truth_occluded[i] = arbiter_occlusion(scene, rays[i]).is_hit();
+    }
+    std::ostringstream text;
+    size_t wrong = 0;
+    for (const std::string& kernel : kernels) {
+        const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
+        std::vector<Hit> batch_hits(rays.size());
+        std::vector<uint8_t> batch_occluded(rays.size());
+        tracer->intersect(rays, batch_hits);
+        tracer->occluded(rays, batch_occluded);
+        for (size_t i = 0; i < rays.size(); ++i) {
+            const HitRecord single = to_record(tracer->intersect(rays[i])), batch = to_record(batch_hits[i]);
+            const bool single_occluded = tracer->occluded(rays[i]);
+            if (hits_agree(single, truth[i], rays[i], diagonal) && hits_agree(batch, truth[i], rays[i], diagonal) &&
+                single_occluded == bool(truth_occluded[i]) && bool(batch_occluded[i]) == bool(truth_occluded[i]))
+                continue;
+            if (wrong++ < 4)
+                text << " " << kernel << " ray " << i << " org (" << rays[i].org.x << ", " << rays[i].org.y << ", "
+                     << rays[i].org.z << ") dir (" << rays[i].dir.x << ", " << rays[i].dir.y << ", " << rays[i].dir.z
+                     << ") [" << rays[i].tmin << ", " << rays[i].tmax << "]: ours t=" << single.t << "/" << batch.t
+                     << " prim=" << single.primitive << "/" << batch.primitive << " occl=" << single_occluded << "/"
+                     << int(batch_occluded[i]) << ", arbiter t=" << truth[i].t << " prim=" << truth[i].primitive
+                     << " occl=" << int(truth_occluded[i]) << ";";
+        }
     }
     if (wrong == 0) return "";
-    return std::to_string(wrong) + " of " + std::to_string(rays.size()) + " wrong:" + text.str();
+    return std::to_string(wrong) + " wrong (rays x kernels, of " + std::to_string(rays.size()) + " rays):" + text.str();
 }
 
 Bvh build_with(const Scene& scene, const std::string& builder, uint32_t max_leaf = 8) {
@@ -258,11 +290,12 @@ TEST_P(TracerWithBuilder, OrganicMeshIsWatertight) {
     ASSERT_EQ(vertices.size(), faces.size() / 2 + 2) << "organic is not a closed, welded mesh";
 
     const Bvh bvh = build_with(scene, GetParam());
-    const BinaryTracer tracer(scene, bvh);
     const std::vector<Vec3> inside = {{0, 0, 0}, {0.5f, -0.3f, 0.2f}, {-1.0f, 0.7f, -0.4f}, {0.3f, 1.1f, 0.9f}};
-    size_t rays = 0;
-    EXPECT_EQ(rays_escaping(vertices, faces, inside, tracer, &rays), "");
-    EXPECT_GT(rays, 450000u);
+    for (const std::string& kernel : kernels_for(GetParam())) {
+        size_t rays = 0;
+        EXPECT_EQ(rays_escaping(vertices, faces, inside, *make_tracer(kernel, scene, bvh), &rays), "") << kernel;
+        EXPECT_GT(rays, 450000u);
+    }
 }
 
 // The same on hand-made closed meshes: a bumpy rotated icosphere, axis-aligned and rotated grid cubes
@@ -284,8 +317,10 @@ TEST_P(TracerWithBuilder, HandMadeClosedMeshesAreWatertight) {
         SCOPED_TRACE(name);
         const Scene scene = mesh.scene(name);
         for (uint32_t max_leaf : {1u, 8u}) {
-            const BinaryTracer tracer(scene, build_with(scene, GetParam(), max_leaf));
-            EXPECT_EQ(rays_escaping(mesh.vertices, mesh.faces, inside, tracer), "") << "max leaf " << max_leaf;
+            const Bvh bvh = build_with(scene, GetParam(), max_leaf);
+            for (const std::string& kernel : kernels_for(GetParam()))
+                EXPECT_EQ(rays_escaping(mesh.vertices, mesh.faces, inside, *make_tracer(kernel, scene, bvh)), "")
+                    << kernel << ", max leaf " << max_leaf;
         }
     }
 }
@@ -373,8 +408,8 @@ TEST_P(TracerWithBuilder, AxisParallelRaysMatchTheArbiter) {
                         }
     ASSERT_TRUE(std::signbit(rays[1].dir.y) || std::signbit(rays[1].dir.z));
     for (uint32_t max_leaf : {1u, 4u}) {
-        const BinaryTracer tracer(scene, build_with(scene, GetParam(), max_leaf));
-        EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "") << "max leaf " << max_leaf;
+        const Bvh tree = build_with(scene, GetParam(), max_leaf);
+        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "") << "max leaf " << max_leaf;
     }
 }
 
@@ -488,7 +523,8 @@ TEST(Tracer, SegmentEndsAtTheHitDistanceMatchTheArbiter) {
         auto corner = [&] { return c + Vec3(3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f); };
         scene.triangles.push_back({corner(), corner(), corner()});
     }
-    const BinaryTracer tracer(scene, build_with(scene, "binned", 2));
+    const Bvh tree = build_with(scene, "binned", 2);
+    const BinaryTracer tracer(scene, tree);
     std::vector<Ray> rays;
     for (const Ray& ray : generate_random_rays(scene.bounds(), 3000, 5)) {
         const HitRecord truth = arbiter_closest_hit(scene, ray);
@@ -504,7 +540,7 @@ TEST(Tracer, SegmentEndsAtTheHitDistanceMatchTheArbiter) {
         }
     }
     ASSERT_GT(rays.size(), 1000u);
-    EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays), "");
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -544,14 +580,15 @@ TEST_P(TracerWithBuilder, DegenerateTrianglesAreNeverHit) {
             if (!(along.dir == Vec3(0.0f))) rays.push_back(along);
         }
     for (uint32_t max_leaf : {1u, 8u}) {
-        const BinaryTracer tracer(scene, build_with(scene, GetParam(), max_leaf));
+        const Bvh tree = build_with(scene, GetParam(), max_leaf);
+        const BinaryTracer tracer(scene, tree);
         size_t degenerate_hits = 0;
         for (const Ray& ray : rays) {
             const Hit hit = tracer.intersect(ray);
             if (hit.is_hit() && hit.primitive != floor) ++degenerate_hits;
         }
         EXPECT_EQ(degenerate_hits, 0u) << "max leaf " << max_leaf;
-        EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "") << "max leaf " << max_leaf;
+        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "") << "max leaf " << max_leaf;
     }
     // Only degenerate triangles: nothing at all is hit.
     Scene only;
@@ -573,7 +610,8 @@ TEST(Tracer, TinyTrianglesAreHitLikeTheArbiterSays) {
         const float s = 1e-5f * (1 + rng.uniform());
         scene.triangles.push_back({c, c + Vec3(s, 0, 0.3f * s), c + Vec3(0.2f * s, s, -s)});
     }
-    const BinaryTracer tracer(scene, build_with(scene, "binned", 4));
+    const Bvh tree = build_with(scene, "binned", 4);
+    const BinaryTracer tracer(scene, tree);
     std::vector<Ray> rays;
     size_t hits = 0;
     for (const Triangle& t : scene.triangles) {
@@ -583,7 +621,7 @@ TEST(Tracer, TinyTrianglesAreHitLikeTheArbiterSays) {
         rays.push_back(ray);
         hits += tracer.intersect(ray).is_hit();
     }
-    EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays), "");
     EXPECT_GT(hits, 150u);
 }
 
@@ -735,12 +773,13 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
     for (uint32_t i = 0; i < scene.triangles.size(); ++i) bvh.primitives.push_back(i);
     const BinaryTracer tracer(scene, bvh);
     std::vector<Ray> rays = generate_random_rays(scene.bounds(), 2000, 6);
-    EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
     // The builder's single-leaf tree of one triangle too.
     Scene one;
     one.triangles = {scene.triangles[0]};
-    const BinaryTracer one_tracer(one, build_with(one, "binned"));
-    EXPECT_EQ(disagreements_with_arbiter(one, one_tracer, rays), "");
+    const Bvh one_tracer_tree = build_with(one, "binned");
+    const BinaryTracer one_tracer(one, one_tracer_tree);
+    EXPECT_EQ(disagreements_with_arbiter(one, one_tracer_tree, rays), "");
 }
 
 // A hand-made tree 1,000 levels deep (the builders' depth limit is 1,024) whose every level has two
@@ -794,7 +833,7 @@ TEST(Tracer, VeryDeepTreeWithAFullStackMatchesTheArbiter) {
     ASSERT_EQ(bvh.nodes.size(), 2 * scene.triangles.size() - 1);
     const BinaryTracer tracer(scene, bvh);
     std::vector<Ray> rays = generate_random_rays(box, 300, 7);
-    EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
     TraversalStats stats;
     tracer.intersect(rays[0], stats);
     EXPECT_GE(stats.nodes_visited, 2u * kLevels);  // every level is entered
@@ -805,7 +844,8 @@ TEST(Tracer, VeryDeepTreeWithAFullStackMatchesTheArbiter) {
 TEST(Tracer, DirectionLengthDoesNotChangeTheAnswer) {
     const IndexedMesh cube = grid_cube(4, -1.0f, 1.0f);
     const Scene scene = cube.scene("cube");
-    const BinaryTracer tracer(scene, build_with(scene, "binned", 2));
+    const Bvh tree = build_with(scene, "binned", 2);
+    const BinaryTracer tracer(scene, tree);
     std::vector<Ray> rays;
     SplitMix64 rng(5);
     for (const Vec3& v : cube.vertices)
@@ -815,7 +855,7 @@ TEST(Tracer, DirectionLengthDoesNotChangeTheAnswer) {
             ray.dir = (v - ray.org) * scale;
             rays.push_back(ray);
         }
-    EXPECT_EQ(disagreements_with_arbiter(scene, tracer, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays), "");
     size_t misses = 0;
     for (const Ray& ray : rays) misses += !tracer.intersect(ray).is_hit();
     EXPECT_EQ(misses, 0u);

@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "spacebvh/tracer.hpp"
+
 #include <tbb/info.h>
 #include <unistd.h>
 
@@ -165,6 +167,12 @@ void write_json(const std::string& path, const nlohmann::json& json) {
     if (!out) throw Error("cannot write JSON file '" + path + "'");
     out << json.dump(2) << '\n';
     if (!out) throw Error("error writing JSON file '" + path + "'");
+}
+
+std::string kernel_help() {
+    std::string help = "traversal kernel:";
+    for (const std::string& name : kernel_names()) help += " " + name;
+    return help + " (auto: bvh8 with the widest node test)";
 }
 
 }  // namespace spacebvh::cli

@@ -74,6 +74,9 @@ private:
     bool drawn_ = false;
 };
 
+// --help text of --kernel: the kernels make_tracer knows on this CPU.
+std::string kernel_help();
+
 // Our builders, plus Embree's own binary trees imported through rtcBuildBVH ("embree-medium",
 // "embree-high"), so Embree's tree quality can be measured under our kernel.
 bool is_embree_tree(const std::string& builder);

@@ -1,14 +1,17 @@
-// spacebvh compare [SCENE...]: the main job. Per scene, every builder and Embree side by side on the
-// same rays: build time, tree quality, Mrays/s (median of --runs) and work per ray for random,
-// primary and diffuse rays, each also as a ratio to the first row; and every row's answers checked
-// against Embree with disagreements settled by the exact arbiter (../shared/spec/rays.md).
+// spacebvh compare [SCENE...]: the main job. Per scene, every builder (under each --kernel) and Embree
+// (single rays and 16-ray packets) side by side on the same rays: build time, tree quality, Mrays/s
+// (median of --runs) and work per ray for random, primary and diffuse rays, each also as a ratio to
+// the first row; and every row's answers checked against Embree with disagreements settled by the
+// exact arbiter (../shared/spec/rays.md).
 #include <cstdio>
+#include <map>
 #include <sstream>
 
 #include "cli_common.hpp"
 #include "embree/embree_scene.hpp"
 #include "ray_sets.hpp"
 #include "spacebvh/metrics.hpp"
+#include "spacebvh/packet_tracer.hpp"
 #include "spacebvh/verify.hpp"
 
 namespace spacebvh::cli {
@@ -25,6 +28,8 @@ struct KindResult {
 
 struct Row {
     std::string name;
+    std::string kernel;  // the kernel column: one name, or the per-kind choice of "auto"
+    std::string kernels[3];  // per ray kind
     double build_ms = 0;
     std::optional<TreeStats> stats;
     std::optional<CostModel> cost;
@@ -44,12 +49,13 @@ double measure_mrays(size_t ray_count, int runs, Trace&& trace) {
     return double(ray_count) / median(ms) / 1000.0;
 }
 
-template <typename Tracer>
-void trace_kind(const Tracer& tracer, std::span<const Ray> rays, int runs, KindResult& result) {
+// Anything with batch intersect(rays, hits) and occluded(rays, flags): our tracers, Embree's scenes.
+template <typename Intersect, typename Occluded>
+void trace_kind(Intersect&& intersect, Occluded&& occluded_batch, std::span<const Ray> rays, int runs, KindResult& result) {
     std::vector<Hit> hits(rays.size());
     std::vector<uint8_t> occluded(rays.size());
-    result.closest_mrays = measure_mrays(rays.size(), runs, [&] { tracer.intersect(rays, hits); });
-    result.occlusion_mrays = measure_mrays(rays.size(), runs, [&] { tracer.occluded(rays, occluded); });
+    result.closest_mrays = measure_mrays(rays.size(), runs, [&] { intersect(rays, hits); });
+    result.occlusion_mrays = measure_mrays(rays.size(), runs, [&] { occluded_batch(rays, occluded); });
     result.closest.resize(rays.size());
     result.occlusion.resize(rays.size());
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -103,6 +109,23 @@ std::string number_or_dash(std::optional<double> value, int precision) {
     return text.str();
 }
 
+// The kernel a --kernel name means for a ray kind: "auto" is the fastest measured on this machine
+// (bench/RESULTS.md): coherent packets of 8x8 tiles for primary rays, 8-wide single rays otherwise.
+std::string kernel_for(const std::string& kernel, RayKind kind) {
+    if (kernel != "auto") return kernel;
+    return kind == RayKind::primary ? "packet8" : "bvh8";
+}
+
+// Primary rays reordered so that each tile x tile block of pixels is consecutive (what packets of
+// tile^2 rays need); tile 0 keeps the spec's row-major order.
+std::vector<Ray> in_tile_order(const std::vector<Ray>& rays, uint32_t width, uint32_t height, uint32_t tile) {
+    if (tile == 0) return rays;
+    std::vector<Ray> ordered;
+    ordered.reserve(rays.size());
+    for (uint32_t i : tile_order(width, height, tile)) ordered.push_back(rays[i]);
+    return ordered;
+}
+
 }  // namespace
 
 void add_compare_command(CLI::App& app) {
@@ -110,6 +133,9 @@ void add_compare_command(CLI::App& app) {
         std::vector<std::string> sources;
         std::string builders = "cbvh,binned,kdbvh,spatial,sbvh";
         std::string embree = "low,medium,high";
+        std::string kernels = "auto";
+        std::string embree_packets = "high";
+        uint32_t tile = 8;
         int runs = 5, build_runs = 3;
         size_t random_count = 1000000;
         uint64_t seed = 1;
@@ -126,6 +152,13 @@ void add_compare_command(CLI::App& app) {
     command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
+        ->capture_default_str();
+    command->add_option("--kernel", options->kernels, "comma-separated traversal kernels, one row each per builder: " + kernel_help())
+        ->capture_default_str();
+    command->add_option("--embree-packets", options->embree_packets,
+                        "Embree qualities also traced with rtcIntersect16/rtcOccluded16 packets (rays in 4x4 tiles for primary), or 'none'")
+        ->capture_default_str();
+    command->add_option("--tile", options->tile, "primary rays in tile x tile blocks (what packets trace together); 0: row-major")
         ->capture_default_str();
     command->add_option("--runs", options->runs, "timed runs per measurement (the median is reported)")->capture_default_str();
     command->add_option("--build-runs", options->build_runs, "builds per builder (the median is reported)")
@@ -149,6 +182,15 @@ void add_compare_command(CLI::App& app) {
         for (const auto& name : CLI::detail::split(options->builders, ','))
             if (!name.empty()) builders.push_back(parse_builder_spec(name, options->build));  // validates each
         if (builders.empty()) throw Error("--builders names no builder");
+        std::vector<std::string> kernels;
+        for (const auto& name : CLI::detail::split(options->kernels, ','))
+            if (!name.empty()) kernels.push_back(name);
+        if (kernels.empty()) throw Error("--kernel names no kernel");
+        if (options->tile > 1024) throw Error("--tile must be in [0, 1024]");
+        std::vector<EmbreeQuality> embree_packet_rows;
+        if (options->embree_packets != "none")
+            for (const auto& name : CLI::detail::split(options->embree_packets, ','))
+                if (!name.empty()) embree_packet_rows.push_back(parse_embree_quality(name));
         std::vector<EmbreeQuality> embree_rows;
         if (options->embree != "none")
             for (const auto& name : CLI::detail::split(options->embree, ','))
@@ -176,17 +218,15 @@ void add_compare_command(CLI::App& app) {
             parameters.height = options->camera.height;
 
             std::vector<Row> rows;
-            std::optional<BinaryTracer> first_tracer;
             std::vector<Ray> ray_sets[3];
+            std::vector<Ray> primary_row_major;
             Progress progress("compare " + scene.name, !options->common.quiet);
-            const size_t row_total = builders.size() + embree_rows.size();
+            const size_t our_rows = builders.size() * kernels.size();
+            const size_t row_total = our_rows + embree_rows.size() + embree_packet_rows.size();
             auto report = [&](size_t row, double within) { progress.update((double(row) + within) / double(row_total)); };
 
             for (size_t b = 0; b < builders.size(); ++b) {
-                Row row;
                 const BuildOptions& build_options = builders[b].options;
-                row.name = builders[b].label + " (C_o=" + number_or_dash(build_options.cost.overlap_penalty, 2) + ")";
-                row.cost = build_options.cost;
                 std::vector<double> build_ms;
                 Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
@@ -194,50 +234,98 @@ void add_compare_command(CLI::App& app) {
                     bvh = build_tree(scene, build_options);
                     build_ms.push_back(milliseconds_since(start));
                 }
-                row.build_ms = median(build_ms);
-                row.stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
-                BinaryTracer tracer(scene, bvh);
-                if (b == 0)
+                const TreeStats tree_stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
+                if (b == 0) {
+                    const BinaryTracer tracer(scene, bvh);
                     for (RayKind kind : kKinds) ray_sets[int(kind)] = make_ray_set(kind, scene, tracer, parameters);
-                for (RayKind kind : kKinds) {
-                    KindResult& result = row.kinds[int(kind)];
-                    trace_kind(tracer, ray_sets[int(kind)], options->runs, result);
-                    TraversalStats stats;
-                    std::vector<Hit> hits(ray_sets[int(kind)].size());
-                    tracer.intersect(ray_sets[int(kind)], hits, &stats);
-                    const double n = std::max<double>(1.0, double(hits.size()));
-                    result.nodes_per_ray = double(stats.nodes_visited) / n;
-                    result.triangles_per_ray = double(stats.triangles_tested) / n;
-                    report(b, (int(kind) + 1) / 3.0);
+                    primary_row_major = ray_sets[int(RayKind::primary)];
+                    ray_sets[int(RayKind::primary)] =
+                        in_tile_order(primary_row_major, parameters.width, parameters.height, options->tile);
                 }
-                if (b == 0) first_tracer.emplace(std::move(tracer));
-                rows.push_back(std::move(row));
+                for (size_t k = 0; k < kernels.size(); ++k) {
+                    Row row;
+                    row.name = builders[b].label + " (C_o=" + number_or_dash(build_options.cost.overlap_penalty, 2) + ")";
+                    row.cost = build_options.cost;
+                    row.build_ms = median(build_ms);
+                    row.stats = tree_stats;
+                    std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by kernel name, shared between kinds
+                    for (RayKind kind : kKinds) {
+                        const std::string name = kernel_for(kernels[k], kind);
+                        auto& tracer = tracers[name];
+                        if (!tracer) tracer = make_tracer(name, scene, bvh);
+                        row.kernels[int(kind)] = tracer->name();
+                        KindResult& result = row.kinds[int(kind)];
+                        const auto& rays = ray_sets[int(kind)];
+                        trace_kind([&](auto r, auto h) { tracer->intersect(r, h); },
+                                   [&](auto r, auto o) { tracer->occluded(r, o); }, rays, options->runs, result);
+                        TraversalStats stats;
+                        std::vector<Hit> hits(rays.size());
+                        tracer->intersect(rays, hits, &stats);
+                        const double n = std::max<double>(1.0, double(hits.size()));
+                        result.nodes_per_ray = double(stats.nodes_visited) / n;
+                        result.triangles_per_ray = double(stats.triangles_tested) / n;
+                        report(b * kernels.size() + k, (int(kind) + 1) / 3.0);
+                    }
+                    row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
+                                     ? row.kernels[0]
+                                     : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
+                    rows.push_back(std::move(row));
+                }
             }
-            for (size_t e = 0; e < embree_rows.size(); ++e) {
+            // Embree: single rays (rtcIntersect1/rtcOccluded1) per quality, then 16-ray packets
+            // (rtcIntersect16/rtcOccluded16), their primary rays in 4x4 tiles, answers put back in our order.
+            const std::vector<uint32_t> tiles_of_16 =
+                options->tile == 0 ? std::vector<uint32_t>{} : tile_order(parameters.width, parameters.height, 4);
+            std::vector<uint32_t> common_position(primary_row_major.size());
+            const std::vector<uint32_t> common_order = options->tile == 0 ? std::vector<uint32_t>{}
+                                                                           : tile_order(parameters.width, parameters.height, options->tile);
+            for (size_t i = 0; i < common_position.size(); ++i) common_position[common_order.empty() ? i : common_order[i]] = uint32_t(i);
+            for (size_t e = 0; e < embree_rows.size() + embree_packet_rows.size(); ++e) {
+                const bool packets = e >= embree_rows.size();
+                const EmbreeQuality quality = packets ? embree_packet_rows[e - embree_rows.size()] : embree_rows[e];
                 Row row;
-                row.name = std::string("embree-") + to_string(embree_rows[e]) + " (own kernel)";
+                row.name = std::string("embree-") + to_string(quality);
+                row.kernel = packets ? "Embree rtcIntersect16/rtcOccluded16" : "Embree rtcIntersect1/rtcOccluded1";
                 std::vector<double> build_ms;
                 std::optional<EmbreeScene> embree;
                 for (int run = 0; run < options->build_runs; ++run) {
                     embree.reset();
-                    embree.emplace(scene, embree_rows[e]);
+                    embree.emplace(scene, quality);
                     build_ms.push_back(embree->build_milliseconds());
                 }
                 row.build_ms = median(build_ms);
                 for (RayKind kind : kKinds) {
-                    trace_kind(*embree, ray_sets[int(kind)], options->runs, row.kinds[int(kind)]);
-                    report(builders.size() + e, (int(kind) + 1) / 3.0);
+                    KindResult& result = row.kinds[int(kind)];
+                    if (!packets) {
+                        trace_kind([&](auto r, auto h) { embree->intersect(r, h); },
+                                   [&](auto r, auto o) { embree->occluded(r, o); }, ray_sets[int(kind)], options->runs, result);
+                    } else if (kind != RayKind::primary || tiles_of_16.empty()) {
+                        trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
+                                   [&](auto r, auto o) { embree->occluded16(r, o); }, ray_sets[int(kind)], options->runs, result);
+                    } else {
+                        std::vector<Ray> tiled;
+                        for (uint32_t i : tiles_of_16) tiled.push_back(primary_row_major[i]);
+                        trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
+                                   [&](auto r, auto o) { embree->occluded16(r, o); }, tiled, options->runs, result);
+                        KindResult ours_order = result;
+                        for (size_t i = 0; i < tiles_of_16.size(); ++i) {
+                            ours_order.closest[common_position[tiles_of_16[i]]] = result.closest[i];
+                            ours_order.occlusion[common_position[tiles_of_16[i]]] = result.occlusion[i];
+                        }
+                        result = std::move(ours_order);
+                    }
+                    report(our_rows + e, (int(kind) + 1) / 3.0);
                 }
                 rows.push_back(std::move(row));
             }
 
             // Correctness: each row against a reference row (the first Embree row for our builders, our
             // first builder for Embree rows); the arbiter settles every disagreement.
-            const size_t embree_reference = builders.size();
+            const size_t embree_reference = our_rows;
             const bool verify = !options->no_verify && !embree_rows.empty();
             if (verify) {
                 for (size_t r = 0; r < rows.size(); ++r) {
-                    const size_t reference = r < builders.size() ? embree_reference : 0;
+                    const size_t reference = r < our_rows ? embree_reference : 0;
                     for (RayKind kind : kKinds) {
                         const auto& rays = ray_sets[int(kind)];
                         KindResult& mine = rows[r].kinds[int(kind)];
@@ -252,23 +340,23 @@ void add_compare_command(CLI::App& app) {
             std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(),
                         scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(), parameters.width,
                         parameters.height, ray_sets[2].size());
-            std::printf("| builder | build ms | nodes | refs | SAH | EPO |");
+            std::printf("| builder | kernel | build ms | nodes | refs | SAH | EPO |");
             for (RayKind kind : kKinds)
-                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s nodes/ray |", to_string(kind), to_string(kind), to_string(kind));
-            std::printf(" wrong |\n|---|---:|---:|---:|---:|---:|");
+                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s boxes/ray |", to_string(kind), to_string(kind), to_string(kind));
+            std::printf(" wrong |\n|---|---|---:|---:|---:|---:|---:|");
             for (int i = 0; i < 3; ++i) std::printf("---:|---:|---:|");
             std::printf("---:|\n");
             const Row& base = rows.front();
             nlohmann::json json_rows = nlohmann::json::array();
             for (const Row& row : rows) {
                 const bool ours = row.stats.has_value();
-                std::printf("| %s | %s | %s | %s | %s | %s |", row.name.c_str(),
+                std::printf("| %s | %s | %s | %s | %s | %s | %s |", row.name.c_str(), row.kernel.c_str(),
                             ratio_text(row.build_ms, base.build_ms, 1).c_str(),
                             ours ? std::to_string(row.stats->nodes).c_str() : "-",
                             ours ? std::to_string(row.stats->references).c_str() : "-",
                             number_or_dash(ours ? std::optional(row.stats->sah) : std::nullopt, 2).c_str(),
                             number_or_dash(ours && !options->no_epo ? std::optional(row.stats->epo) : std::nullopt, 2).c_str());
-                nlohmann::json json_row = {{"builder", row.name}, {"build_ms", row.build_ms}};
+                nlohmann::json json_row = {{"builder", row.name}, {"kernel", row.kernel}, {"build_ms", row.build_ms}};
                 if (row.cost) json_row["cost"] = row.cost->describe();
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
@@ -286,6 +374,7 @@ void add_compare_command(CLI::App& app) {
                                 ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(),
                                 number_or_dash(k.nodes_per_ray >= 0 ? std::optional(k.nodes_per_ray) : std::nullopt, 1).c_str());
                     nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays}, {"occlusion_mrays", k.occlusion_mrays}};
+                    if (!row.kernels[int(kind)].empty()) json_kind["kernel"] = row.kernels[int(kind)];
                     if (k.nodes_per_ray >= 0) {
                         json_kind["nodes_per_ray"] = k.nodes_per_ray;
                         json_kind["triangles_per_ray"] = k.triangles_per_ray;

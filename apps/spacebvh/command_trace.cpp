@@ -9,7 +9,7 @@ namespace spacebvh::cli {
 
 void add_trace_command(CLI::App& app) {
     struct Options {
-        std::string source, rays_path, hits_path;
+        std::string source, rays_path, hits_path, kernel = "auto";
         bool occlusion = false, stats = false;
         SceneOptions scene;
         BuildCliOptions build;
@@ -22,6 +22,7 @@ void add_trace_command(CLI::App& app) {
     command->add_option("--hits", options->hits_path, "hit file to write (REFHITS1)")->required();
     command->add_flag("--occlusion", options->occlusion, "any-hit queries: t = 0 occluded, +inf free");
     command->add_flag("--stats", options->stats, "count nodes visited and triangles tested per ray");
+    command->add_option("--kernel", options->kernel, kernel_help())->capture_default_str();
     options->scene.add_to(*command);
     options->build.add_to(*command);
     options->common.add_to(*command);
@@ -31,7 +32,8 @@ void add_trace_command(CLI::App& app) {
         const std::vector<Ray> rays = read_ray_file(options->rays_path);
         const BuildOptions build_options = options->build.options(options->build.builder);
         const Bvh bvh = build_tree(scene, build_options);
-        const BinaryTracer tracer(scene, bvh);
+        const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
+        const Tracer& tracer = *tracer_pointer;
         TraversalStats stats;
         TraversalStats* stats_out = options->stats ? &stats : nullptr;
         std::vector<HitRecord> records(rays.size());
@@ -49,10 +51,10 @@ void add_trace_command(CLI::App& app) {
         const double trace_ms = milliseconds_since(start);
         for (const HitRecord& record : records) hit_count += record.is_hit();
         write_hit_file(options->hits_path, records);
-        std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s)\n", rays.size(), hit_count,
+        std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s), kernel %s\n", rays.size(), hit_count,
                     options->occlusion ? "occluded" : "hits", trace_ms, double(rays.size()) / trace_ms / 1000.0,
-                    options->common.effective_threads(), bvh.builder.c_str(), build_options.cost.describe().c_str());
-        nlohmann::json json = {{"rays", rays.size()}, {"hits", hit_count}, {"trace_ms", trace_ms}, {"builder", bvh.builder}};
+                    options->common.effective_threads(), bvh.builder.c_str(), build_options.cost.describe().c_str(), tracer.name().c_str());
+        nlohmann::json json = {{"rays", rays.size()}, {"hits", hit_count}, {"trace_ms", trace_ms}, {"builder", bvh.builder}, {"kernel", tracer.name()}};
         if (options->stats && !rays.empty()) {
             const double n = double(rays.size());
             std::printf("per ray: %.2f nodes visited, %.2f triangles tested\n", double(stats.nodes_visited) / n,

@@ -2,7 +2,7 @@
 
 namespace spacebvh::cli {
 
-std::vector<Ray> make_ray_set(RayKind kind, const Scene& scene, const BinaryTracer& tracer, const RaySetParameters& p) {
+std::vector<Ray> make_ray_set(RayKind kind, const Scene& scene, const Tracer& tracer, const RaySetParameters& p) {
     switch (kind) {
         case RayKind::random:
             return generate_random_rays(scene.bounds(), p.random_count, p.seed);

@@ -35,7 +35,7 @@ struct Image {
 // Headlight shading: grey level from |dot(geometric normal, ray direction)|, a flat background
 // colour for misses. Rows are traced in parallel on the calling thread's oneTBB arena.
 // Throws Error for a zero or absurd image size (more than 16384 on a side) or a bad camera.
-Image render_shaded(const Scene& scene, const BinaryTracer& tracer, const Camera& camera, uint32_t width,
+Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
                     uint32_t height);
 
 enum class HeatmapQuantity {
@@ -66,7 +66,7 @@ struct HeatmapInfo {
 
 // Per-pixel traversal cost (closest-hit primary rays) in a perceptual colour ramp (viridis-like,
 // dark = cheap, yellow = expensive). The image is width x (height + legend rows).
-Image render_heatmap(const Scene& scene, const BinaryTracer& tracer, const Camera& camera, uint32_t width,
+Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
                      uint32_t height, HeatmapInfo* info = nullptr, const HeatmapOptions& options = {});
 
 // The heat map's colour ramp at t in [0, 1] (clamped).

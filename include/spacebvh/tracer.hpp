@@ -1,9 +1,11 @@
-// Single-ray traversal (closest hit and any hit) over a compact binary layout of a Bvh.
+// Single-ray traversal (closest hit and any hit): the interface every kernel offers, and the compact
+// binary layout, the reference kernel. Wide SIMD kernels: wide_tracer.hpp; choosing one: make_tracer.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "spacebvh/bvh.hpp"
@@ -31,32 +33,60 @@ struct TraversalStats {
     }
 };
 
+// What every traversal kernel offers. Answers are exact (equal to the arbiter of
+// ../shared/spec/rays.md) whatever the kernel; only speed and the work counted in TraversalStats differ.
+class Tracer {
+public:
+    virtual ~Tracer() = default;
+
+    virtual Hit intersect(const Ray& ray) const = 0;
+    virtual Hit intersect(const Ray& ray, TraversalStats& stats) const = 0;
+    virtual bool occluded(const Ray& ray) const = 0;
+    virtual bool occluded(const Ray& ray, TraversalStats& stats) const = 0;
+
+    // Batches across the calling thread's oneTBB arena. `stats`, when given, receives the totals.
+    virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats = nullptr) const = 0;
+    virtual void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const = 0;
+
+    virtual size_t memory_bytes() const = 0;  // nodes + leaf triangle data
+    virtual std::string name() const = 0;     // the kernel, as make_tracer spells it
+};
+
 // Compact binary layout: each inner node stores both child boxes together (one fetch decides both),
 // the nearer child is visited first, and leaves hold their triangles' vertices contiguously.
 // Triangle tests are watertight (Woop, Benthin, Wald 2013) with an exact double-precision recheck
 // near edges, so the answers equal the exact arbiter of ../shared/spec/rays.md.
-class BinaryTracer {
+// TraversalStats::nodes_visited counts child boxes tested (two per compact node).
+class BinaryTracer final : public Tracer {
 public:
     BinaryTracer(const Scene& scene, const Bvh& bvh);
-    ~BinaryTracer();
+    ~BinaryTracer() override;
     BinaryTracer(BinaryTracer&&) noexcept;
     BinaryTracer& operator=(BinaryTracer&&) noexcept;
 
-    Hit intersect(const Ray& ray) const;
-    Hit intersect(const Ray& ray, TraversalStats& stats) const;
-    bool occluded(const Ray& ray) const;
-    bool occluded(const Ray& ray, TraversalStats& stats) const;
-
-    // Batches across the calling thread's oneTBB arena. `stats`, when given, receives the totals.
-    void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats = nullptr) const;
-    void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const;
-
-    size_t memory_bytes() const;  // nodes + leaf triangle data
+    Hit intersect(const Ray& ray) const override;
+    Hit intersect(const Ray& ray, TraversalStats& stats) const override;
+    bool occluded(const Ray& ray) const override;
+    bool occluded(const Ray& ray, TraversalStats& stats) const override;
+    void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats = nullptr) const override;
+    void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const override;
+    size_t memory_bytes() const override;
+    std::string name() const override { return "binary"; }
 
     struct Layout;
 
 private:
     std::unique_ptr<Layout> layout_;
 };
+
+// The kernels by name: "binary" (the scalar reference); "bvh4", "bvh8" (wide nodes with the widest node
+// test this CPU has) or "bvh4-NODETEST" / "bvh8-NODETEST" with NODETEST one of scalar, sse, avx2,
+// avx512 (wide_tracer.hpp); packets of consecutive rays "packet8" / "packet16" (64 or 256 rays: 8x8 or
+// 16x16 tiles when the rays are in tile_order; packet_tracer.hpp), also with "-NODETEST"; and "auto",
+// the fastest single-ray kernel measured (bench/RESULTS.md). Throws Error for an unknown name or a
+// node test this CPU or width lacks.
+std::unique_ptr<Tracer> make_tracer(const std::string& kernel, const Scene& scene, const Bvh& bvh);
+// The names make_tracer accepts on this CPU.
+std::vector<std::string> kernel_names();
 
 }  // namespace spacebvh

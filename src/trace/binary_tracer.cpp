@@ -1,12 +1,10 @@
 #include <immintrin.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
-#include <atomic>
 #include <cstring>
 
 #include "spacebvh/tracer.hpp"
 #include "trace/huge_page_allocator.hpp"
+#include "trace/traversal_common.hpp"
 #include "trace/watertight_triangle.hpp"
 
 namespace spacebvh {
@@ -35,9 +33,7 @@ namespace {
 
 // A push happens at most once per level, and build options cap the depth at 1024.
 constexpr int kStackSize = 1024 + 8;
-// Conservative box test (Ize 2013; pbrt-v4 gamma(3)): widen the far distance by the worst rounding of
-// the slab computation so rounding never culls a box the ray really touches.
-constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0f * 0x1p-24f);
+using trace::kFarScale;
 
 void set_child(CompactNode& node, int slot, const AABB& box, uint32_t child, uint32_t count) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -227,56 +223,41 @@ BinaryTracer::BinaryTracer(BinaryTracer&&) noexcept = default;
 BinaryTracer& BinaryTracer::operator=(BinaryTracer&&) noexcept = default;
 
 Hit BinaryTracer::intersect(const Ray& ray) const {
+    const trace::StandardFloatingPointMode mode;
     Hit hit;
     traverse<false, false>(*layout_, ray, hit, nullptr);
     return hit;
 }
 
 Hit BinaryTracer::intersect(const Ray& ray, TraversalStats& stats) const {
+    const trace::StandardFloatingPointMode mode;
     Hit hit;
     traverse<false, true>(*layout_, ray, hit, &stats);
     return hit;
 }
 
 bool BinaryTracer::occluded(const Ray& ray) const {
+    const trace::StandardFloatingPointMode mode;
     Hit unused;
     return traverse<true, false>(*layout_, ray, unused, nullptr);
 }
 
 bool BinaryTracer::occluded(const Ray& ray, TraversalStats& stats) const {
+    const trace::StandardFloatingPointMode mode;
     Hit unused;
     return traverse<true, true>(*layout_, ray, unused, &stats);
 }
 
-namespace {
-// Runs `trace(i, stats)` for every ray across the arena; stats are summed exactly (integers).
-template <typename Trace>
-void for_each_ray(size_t count, TraversalStats* stats, Trace&& trace) {
-    std::atomic<uint64_t> nodes{0}, triangles{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const tbb::blocked_range<size_t>& range) {
-        TraversalStats local;
-        for (size_t i = range.begin(); i != range.end(); ++i) trace(i, local);
-        if (stats) {
-            nodes += local.nodes_visited;
-            triangles += local.triangles_tested;
-        }
-    });
-    if (stats) *stats = {nodes.load(), triangles.load()};
-}
-}  // namespace
-
 void BinaryTracer::intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats) const {
-    if (stats)
-        for_each_ray(rays.size(), stats, [&](size_t i, TraversalStats& s) { hits[i] = intersect(rays[i], s); });
-    else
-        for_each_ray(rays.size(), nullptr, [&](size_t i, TraversalStats&) { hits[i] = intersect(rays[i]); });
+    trace::intersect_batch(rays, hits, stats, [&](const Ray& ray, Hit& hit, TraversalStats* s) {
+        return s ? traverse<false, true>(*layout_, ray, hit, s) : traverse<false, false>(*layout_, ray, hit, nullptr);
+    });
 }
 
 void BinaryTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> result, TraversalStats* stats) const {
-    if (stats)
-        for_each_ray(rays.size(), stats, [&](size_t i, TraversalStats& s) { result[i] = occluded(rays[i], s); });
-    else
-        for_each_ray(rays.size(), nullptr, [&](size_t i, TraversalStats&) { result[i] = occluded(rays[i]); });
+    trace::occluded_batch(rays, result, stats, [&](const Ray& ray, Hit& hit, TraversalStats* s) {
+        return s ? traverse<true, true>(*layout_, ray, hit, s) : traverse<true, false>(*layout_, ray, hit, nullptr);
+    });
 }
 
 size_t BinaryTracer::memory_bytes() const {

@@ -190,7 +190,7 @@ std::array<uint8_t, 3> heatmap_colour(double t) {
     return colour;
 }
 
-Image render_shaded(const Scene& scene, const BinaryTracer& tracer, const Camera& camera, uint32_t width,
+Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
                     uint32_t height) {
     check_size(width, height, "render_shaded");
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
@@ -216,7 +216,7 @@ Image render_shaded(const Scene& scene, const BinaryTracer& tracer, const Camera
     return image;
 }
 
-Image render_heatmap(const Scene& scene, const BinaryTracer& tracer, const Camera& camera, uint32_t width,
+Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
                      uint32_t height, HeatmapInfo* info, const HeatmapOptions& options) {
     check_size(width, height, "render_heatmap");
     if (!(options.percentile > 0.0 && options.percentile <= 1.0)) {

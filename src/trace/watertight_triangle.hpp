@@ -13,12 +13,17 @@
 
 namespace spacebvh::trace {
 
+// Absolute slack of the edge functions' error bound for results in the subnormal range (see
+// intersect_watertight): far above the few 2^-150 roundings, far below any normal-range bound.
+inline constexpr float kUnderflowBound = 0x1p-140f;
+
 // Per-ray constants of the shear that maps the ray direction onto +z.
 struct WatertightRay {
     Vec3 org;
     int kx = 0, ky = 1, kz = 2;
     float shear_x = 0, shear_y = 0, shear_z = 1;
 
+    WatertightRay() = default;
     explicit WatertightRay(const Ray& ray) : org(ray.org) {
         const Vec3 a{std::fabs(ray.dir.x), std::fabs(ray.dir.y), std::fabs(ray.dir.z)};
         kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
@@ -61,6 +66,19 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
     return true;
 }
 
+// The ray certainly crosses the triangle's interior (every edge function u, v, w clearly of one sign);
+// only the distance is left. Shared by the scalar test and the four-wide test of wide_kernel.inl.
+[[gnu::always_inline]] inline bool finish_crossing(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2, float tmax,
+                                                   float u, float v, float w, TriangleHit& hit) {
+    const float det = u + v + w;
+    const double t = plane_hit_distance(ray, v0, v1, v2);
+    if (!(t >= ray.tmin && t <= tmax)) return false;
+    hit.t = float(t);
+    hit.u = v / det;
+    hit.v = w / det;
+    return true;
+}
+
 // Tests the closed triangle (v0, v1, v2) for a hit with t in [tmin, tmax]. Returns true and fills
 // `hit` on a hit. Degenerate triangles never hit.
 [[gnu::always_inline]] inline bool intersect_watertight(const Ray& ray, const WatertightRay& w, const Vec3& v0, const Vec3& v1,
@@ -84,7 +102,9 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
     const float magnitude = max(max(magnitude_of(a), magnitude_of(b)), magnitude_of(c));
     const float size = max(max(max(std::fabs(ax), std::fabs(ay)), max(std::fabs(bx), std::fabs(by))),
                            max(std::fabs(cx), std::fabs(cy)));
-    const float error_bound = 32.0f * 0x1p-24f * magnitude * size;
+    // The absolute term covers underflow: on a tiny scene the products fall below the normal range,
+    // where rounding errors are absolute (at most 2^-150 each), not relative.
+    const float error_bound = 32.0f * 0x1p-24f * magnitude * size + kUnderflowBound;
 
     const bool clearly_outside = (u < -error_bound || v < -error_bound || wgt < -error_bound) &&
                                  (u > error_bound || v > error_bound || wgt > error_bound);
@@ -94,14 +114,7 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
     if (!clearly_inside) [[unlikely]]
         return decide_exactly(ray, v0, v1, v2, tmax, u, v, wgt, hit);
 
-    // The ray certainly crosses the triangle's interior; only the distance is left.
-    const float det = u + v + wgt;
-    const double t = plane_hit_distance(ray, v0, v1, v2);
-    if (!(t >= ray.tmin && t <= tmax)) return false;
-    hit.t = float(t);
-    hit.u = v / det;
-    hit.v = wgt / det;
-    return true;
+    return finish_crossing(ray, v0, v1, v2, tmax, u, v, wgt, hit);
 }
 
 }  // namespace spacebvh::trace

@@ -1,0 +1,28 @@
+// Included after wide_kernel.inl and packet_kernel.inl; see kernel_instances.cpp.
+
+// The entry points of both kernels, which kernel_instances.cpp puts in its tables.
+template <class S>
+struct Kernels {
+    static bool closest(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, false, false>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, nullptr);
+    }
+    static bool closest_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, false, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
+    }
+    static bool occluded(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, true, false>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, nullptr);
+    }
+    static bool occluded_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, true, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
+    }
+    static void packet_closest(const void* layout, const Ray* rays, uint32_t count, Hit* hits, TraversalStats* stats) {
+        const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
+        if (stats) trace_packet<S, false, true>(wide, rays, count, hits, nullptr, stats);
+        else trace_packet<S, false, false>(wide, rays, count, hits, nullptr, nullptr);
+    }
+    static void packet_occluded(const void* layout, const Ray* rays, uint32_t count, uint8_t* occluded, TraversalStats* stats) {
+        const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
+        if (stats) trace_packet<S, true, true>(wide, rays, count, nullptr, occluded, stats);
+        else trace_packet<S, true, false>(wide, rays, count, nullptr, occluded, nullptr);
+    }
+};

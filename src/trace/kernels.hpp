@@ -1,0 +1,31 @@
+// The compiled kernels (kernel_instances.cpp): one copy per instruction set, looked up at run time.
+// WideTracer and PacketTracer hold the table of the node test they were asked for.
+#pragma once
+
+#include <cstdint>
+
+#include "spacebvh/wide_tracer.hpp"
+
+namespace spacebvh::trace {
+
+bool cpu_has(NodeTest test);
+bool width_has(int width, NodeTest test);
+
+// Single rays over a WideLayout<width> (passed as const void*). Stats may not be null in *_stats.
+struct SingleRayKernels {
+    bool (*closest)(const void* layout, const Ray& ray, Hit& hit);
+    bool (*closest_stats)(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats);
+    bool (*occluded)(const void* layout, const Ray& ray, Hit& hit);
+    bool (*occluded_stats)(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats);
+};
+SingleRayKernels single_ray_kernels(int width, NodeTest test);
+
+// A packet of `count` (<= kMaxPacket) rays over a WideLayout<8>. Stats may be null.
+inline constexpr uint32_t kMaxPacket = 256;
+struct PacketKernels {
+    void (*closest)(const void* layout, const Ray* rays, uint32_t count, Hit* hits, TraversalStats* stats);
+    void (*occluded)(const void* layout, const Ray* rays, uint32_t count, uint8_t* occluded, TraversalStats* stats);
+};
+PacketKernels packet_kernels(NodeTest test);
+
+}  // namespace spacebvh::trace

@@ -1,0 +1,197 @@
+// Coherent packets (e.g. the primary rays of an 8x8 image tile) traced together through a wide BVH,
+// after Wald, Boulos and Shirley, "Ray Tracing Deformable Scenes Using Dynamic Bounding Volume
+// Hierarchies" (TOG 2007), the traversal the paper's "frustum" figures measure:
+//   - first active ray: a node is entered with the index of the first ray that hits it; rays before it
+//     are known to miss and are never looked at again below it;
+//   - frustum culling: when the first active ray misses a child, an interval-arithmetic bound over the
+//     whole packet (all origins x all inverse directions) culls the child for every ray at once;
+//     only if that bound cannot rule it out are the later rays tested one by one;
+//   - packets whose rays do not share direction signs (coherence lost) fall back to single rays.
+// Ray-box and ray-triangle tests per ray are the single-ray kernel's (same answers, exactly).
+// Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
+
+// The interval bounds of a packet: every ray's origin and inverse direction lie in these boxes.
+struct PacketFrustum {
+    float org_lo[3], org_hi[3], inv_lo[3], inv_hi[3];
+    int entry_plane[3], exit_plane[3];
+    float tmin_lo, tmax_hi;
+};
+
+// False when the rays do not all share the sign of each direction component (or one is zero): the
+// entry and exit planes then differ between rays and the packet goes ray by ray.
+inline bool make_frustum(const Ray* rays, uint32_t count, PacketFrustum& frustum) {
+    for (int axis = 0; axis < 3; ++axis) {
+        const bool negative = rays[0].dir[axis] < 0.0f;
+        frustum.org_lo[axis] = frustum.org_hi[axis] = rays[0].org[axis];
+        frustum.inv_lo[axis] = frustum.inv_hi[axis] = 1.0f / rays[0].dir[axis];
+        for (uint32_t i = 0; i < count; ++i) {
+            const float d = rays[i].dir[axis];
+            if (d == 0.0f || (d < 0.0f) != negative) return false;
+            const float inv = 1.0f / d;
+            frustum.org_lo[axis] = std::min(frustum.org_lo[axis], rays[i].org[axis]);
+            frustum.org_hi[axis] = std::max(frustum.org_hi[axis], rays[i].org[axis]);
+            frustum.inv_lo[axis] = std::min(frustum.inv_lo[axis], inv);
+            frustum.inv_hi[axis] = std::max(frustum.inv_hi[axis], inv);
+        }
+        if (!std::isfinite(frustum.inv_lo[axis]) || !std::isfinite(frustum.inv_hi[axis])) return false;
+        frustum.entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
+        frustum.exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
+    }
+    frustum.tmin_lo = rays[0].tmin;
+    frustum.tmax_hi = rays[0].tmax;
+    for (uint32_t i = 0; i < count; ++i) {
+        frustum.tmin_lo = std::min(frustum.tmin_lo, rays[i].tmin);
+        frustum.tmax_hi = std::max(frustum.tmax_hi, rays[i].tmax);
+    }
+    return true;
+}
+
+// Bit i set unless child i is certainly missed by every ray of the packet. Each ray's slab distance
+// (p - o) * inv is bilinear in (o, inv), so over the packet it lies between the smallest and largest of
+// the four corner products; the bounds are then widened by 2^-18 relative, far more than the rounding
+// of either computation (and than kFarScale), so culling is conservative.
+template <class S>
+[[gnu::always_inline]] inline unsigned frustum_mask(const WideNode<S::kLanes>& node, const PacketFrustum& frustum) {
+    using F = typename S::F;
+    F lower = S::set1(frustum.tmin_lo), upper = S::set1(frustum.tmax_hi);
+    for (int axis = 0; axis < 3; ++axis) {
+        const F inv_lo = S::set1(frustum.inv_lo[axis]), inv_hi = S::set1(frustum.inv_hi[axis]);
+        const F org_lo = S::set1(frustum.org_lo[axis]), org_hi = S::set1(frustum.org_hi[axis]);
+        const F entry = S::load(node.planes[frustum.entry_plane[axis]]);
+        const F entry_near = S::sub(entry, org_hi), entry_far = S::sub(entry, org_lo);
+        const F entry_min = S::min(S::min(S::mul(entry_near, inv_lo), S::mul(entry_near, inv_hi)),
+                                   S::min(S::mul(entry_far, inv_lo), S::mul(entry_far, inv_hi)));
+        const F exit = S::load(node.planes[frustum.exit_plane[axis]]);
+        const F exit_near = S::sub(exit, org_hi), exit_far = S::sub(exit, org_lo);
+        const F exit_max = S::max(S::max(S::mul(exit_near, inv_lo), S::mul(exit_near, inv_hi)),
+                                  S::max(S::mul(exit_far, inv_lo), S::mul(exit_far, inv_hi)));
+        lower = S::max(entry_min, lower);
+        upper = S::min(exit_max, upper);
+    }
+    const F grow = S::set1(1.0f + 0x1p-18f), shrink = S::set1(1.0f - 0x1p-18f);
+    const F lower_widened = S::min(S::mul(lower, grow), S::mul(lower, shrink));
+    const F upper_widened = S::max(S::mul(upper, grow), S::mul(upper, shrink));
+    return S::hit_mask(lower_widened, upper_widened);
+}
+
+// One ray of a packet as enter_children sees it: its origin and inverse direction broadcast on demand
+// (cheap loads) instead of kept in registers per ray.
+template <class S>
+struct PacketRay {
+    const float* org_scalar;
+    const float* inv_dir_scalar;
+    const int* entry_plane;
+    const int* exit_plane;
+    typename S::F org(int axis) const { return S::set1(org_scalar[axis]); }
+    typename S::F inv_dir(int axis) const { return S::set1(inv_dir_scalar[axis]); }
+};
+
+template <class S, bool kAnyHit, bool kStats>
+void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
+                  TraversalStats* stats) {
+    constexpr int W = S::kLanes;
+    PacketFrustum frustum;
+    if (!make_frustum(rays, count, frustum)) {
+        for (uint32_t i = 0; i < count; ++i) {
+            Hit hit;
+            const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
+            if constexpr (kAnyHit) occluded[i] = found;
+            else hits[i] = hit;
+        }
+        return;
+    }
+
+    // Per-ray state. A ray whose occlusion is settled gets tmax = -inf: it enters no box again.
+    struct alignas(16) RayState {
+        float org[3], inv_dir[3];
+        float tmin, tmax;
+        WatertightRay shear;
+    };
+    RayState state[kMaxPacket];
+    for (uint32_t i = 0; i < count; ++i) {
+        for (int axis = 0; axis < 3; ++axis) {
+            state[i].org[axis] = rays[i].org[axis];
+            state[i].inv_dir[axis] = 1.0f / rays[i].dir[axis];
+        }
+        state[i].tmin = rays[i].tmin;
+        state[i].tmax = rays[i].tmax;
+        state[i].shear = WatertightRay(rays[i]);
+        if constexpr (kAnyHit) occluded[i] = 0;
+        else hits[i] = Hit{};
+    }
+    uint32_t unsettled = count;
+
+    struct Entry {
+        uint32_t child, count, first;
+    };
+    Entry stack[(W - 1) * 1024 + 1];
+    int top = 0;
+    Entry current{0, 0, 0};
+
+    while (true) {
+        if (current.count == 0) {
+            const WideNode<W>& node = layout.nodes[current.child];
+            uint32_t valid_children = 0;
+            if constexpr (kStats)
+                for (int slot = 0; slot < W; ++slot) valid_children += node.planes[0][slot] <= node.planes[1][slot];
+            alignas(32) float first_entry[W];
+            uint32_t first_ray[W];
+            unsigned assigned = 0;
+            unsigned remaining = (1u << W) - 1;
+            for (uint32_t i = current.first; i < count && remaining; ++i) {
+                if (i == current.first + 1) {
+                    // The first active ray missed some children: the packet's frustum culls most of them.
+                    remaining &= frustum_mask<S>(node, frustum);
+                    if (!remaining) break;
+                }
+                const PacketRay<S> ray{state[i].org, state[i].inv_dir, frustum.entry_plane, frustum.exit_plane};
+                alignas(32) float entry[W];
+                alignas(32) uint32_t slot[W];
+                const int entered = enter_children<S>(node, ray, state[i].tmin, state[i].tmax, entry, slot);
+                if constexpr (kStats) stats->nodes_visited += valid_children;
+                for (int k = 0; k < entered; ++k) {
+                    if (!((remaining >> slot[k]) & 1)) continue;
+                    first_ray[slot[k]] = i;
+                    first_entry[slot[k]] = entry[k];
+                    assigned |= 1u << slot[k];
+                    remaining &= ~(1u << slot[k]);
+                }
+            }
+            if (assigned) {
+                // Nearest first by the entry distance of each child's first ray; the rest go on the stack.
+                uint32_t order[W];
+                int n = 0;
+                for (unsigned bits = assigned; bits; bits &= bits - 1) {
+                    const uint32_t slot = uint32_t(__builtin_ctz(bits));
+                    int j = n++;
+                    while (j > 0 && first_entry[order[j - 1]] < first_entry[slot]) {
+                        order[j] = order[j - 1];
+                        --j;
+                    }
+                    order[j] = slot;
+                }
+                for (int k = 0; k < n - 1; ++k) stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]]};
+                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]]};
+                if (current.count == 0) prefetch_node(layout.nodes[current.child]);
+                continue;
+            }
+        } else {
+            for (uint32_t i = current.first; i < count; ++i) {
+                RayState& ray_state = state[i];
+                if (kAnyHit && occluded[i]) continue;
+                const PackRay pack_ray(ray_state.shear);
+                Hit unused;
+                bool found = false;
+                test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], ray_state.shear, pack_ray,
+                                              ray_state.tmax, kAnyHit ? unused : hits[i], found, stats);
+                if (kAnyHit && found) {
+                    occluded[i] = 1;
+                    ray_state.tmax = -kInfinity;
+                    if (--unsettled == 0) return;
+                }
+            }
+        }
+        if (top == 0) return;
+        current = stack[--top];
+    }
+}

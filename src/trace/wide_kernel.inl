@@ -1,0 +1,230 @@
+// The single-ray kernels of wide BVHs, written once over a node-test policy `S`. wide_tracer.cpp
+// includes this file once per instruction set, inside a namespace that defines the policies and under
+// `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.
+//
+// A policy S provides: kLanes (the node width W), the vector type F with load/set1/sub/mul/min/max,
+// hit_mask(near, limit) (bit i: near[i] <= limit[i]), collect(mask, near, entry, slot) (writes the
+// entry distances and slots of the hit children in slot order, returns their number), and
+// kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
+// No lambdas here: they would not inherit the target of the pragma region.
+
+// Per-ray constants of the box test: for each axis, which plane of a node's SoA boxes the ray enters
+// through (the lower one for a positive direction) and which it leaves through.
+template <class S>
+struct RayBoxes {
+    typename S::F org_vector[3], inv_dir_vector[3];
+    int entry_plane[3], exit_plane[3];
+
+    explicit RayBoxes(const Ray& ray) {
+        for (int axis = 0; axis < 3; ++axis) {
+            const float inv = 1.0f / ray.dir[axis];  // +-inf for axis-parallel rays
+            org_vector[axis] = S::set1(ray.org[axis]);
+            inv_dir_vector[axis] = S::set1(inv);
+            const int negative = std::signbit(inv) ? 1 : 0;
+            entry_plane[axis] = 2 * axis + negative;
+            exit_plane[axis] = 2 * axis + 1 - negative;
+        }
+    }
+    typename S::F org(int axis) const { return org_vector[axis]; }
+    typename S::F inv_dir(int axis) const { return inv_dir_vector[axis]; }
+};
+
+// Tests all child boxes of `node`: the slab test of the binary kernel, lane-parallel, with the same
+// operand order (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound unchanged:
+// boxes are closed) and the same conservative widening of the exit distance (kFarScale). Returns the
+// number of children entered within [tmin, tmax], their entry distances and slots in slot order.
+// `Boxes` gives the ray's origin and inverse direction broadcast (RayBoxes, or a packet's ray).
+template <class S, class Boxes>
+[[gnu::always_inline]] inline int enter_children(const WideNode<S::kLanes>& node, const Boxes& ray, float tmin, float tmax,
+                                                 float* entry, uint32_t* slot) {
+    typename S::F near = S::set1(tmin), far = S::set1(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const typename S::F org = ray.org(axis), inv_dir = ray.inv_dir(axis);
+        const typename S::F t_entry = S::mul(S::sub(S::load(node.planes[ray.entry_plane[axis]]), org), inv_dir);
+        const typename S::F t_exit = S::mul(S::sub(S::load(node.planes[ray.exit_plane[axis]]), org), inv_dir);
+        near = S::max(t_entry, near);
+        far = S::min(t_exit, far);
+    }
+    const typename S::F limit = S::min(S::mul(far, S::set1(kFarScale)), S::set1(tmax));
+    return S::collect(S::hit_mask(near, limit), near, entry, slot);
+}
+
+// Per-ray constants of the four-wide watertight triangle test (the shear of WatertightRay, broadcast).
+struct PackRay {
+    __m128 org[3];
+    __m128 shear_x, shear_y;
+    int kx, ky, kz;
+
+    explicit PackRay(const WatertightRay& w)
+        : shear_x(_mm_set1_ps(w.shear_x)), shear_y(_mm_set1_ps(w.shear_y)), kx(w.kx), ky(w.ky), kz(w.kz) {
+        for (int axis = 0; axis < 3; ++axis) org[axis] = _mm_set1_ps(w.org[axis]);
+    }
+};
+
+struct PackEdges {
+    alignas(16) float u[4], v[4], w[4];
+    int outside, inside;  // lane masks: clearly outside, clearly inside (see intersect_watertight)
+};
+
+[[gnu::always_inline]] inline __m128 abs4(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
+
+// The edge functions and their error bound for four triangles: exactly the float operations of
+// intersect_watertight, lane by lane, so each lane decides exactly as the scalar test would.
+[[gnu::always_inline]] inline void pack_edges(const TrianglePack& pack, const PackRay& ray, PackEdges& edges) {
+    __m128 sheared_x[3], sheared_y[3], magnitude = _mm_setzero_ps(), size = _mm_setzero_ps();
+    for (int k = 0; k < 3; ++k) {
+        const __m128 px = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.kx]), ray.org[ray.kx]);
+        const __m128 py = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.ky]), ray.org[ray.ky]);
+        const __m128 pz = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.kz]), ray.org[ray.kz]);
+        const __m128 shift_x = _mm_mul_ps(ray.shear_x, pz), shift_y = _mm_mul_ps(ray.shear_y, pz);
+        sheared_x[k] = _mm_sub_ps(px, shift_x);
+        sheared_y[k] = _mm_sub_ps(py, shift_y);
+        const __m128 vertex_magnitude =
+            _mm_max_ps(_mm_add_ps(abs4(px), abs4(shift_x)), _mm_add_ps(abs4(py), abs4(shift_y)));
+        magnitude = _mm_max_ps(magnitude, vertex_magnitude);
+        size = _mm_max_ps(size, _mm_max_ps(abs4(sheared_x[k]), abs4(sheared_y[k])));
+    }
+    const __m128 ax = sheared_x[0], ay = sheared_y[0], bx = sheared_x[1], by = sheared_y[1];
+    const __m128 cx = sheared_x[2], cy = sheared_y[2];
+    const __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+    const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+    const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+    const __m128 bound =
+        _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(32.0f * 0x1p-24f), magnitude), size), _mm_set1_ps(kUnderflowBound));
+    const __m128 negative_bound = _mm_sub_ps(_mm_setzero_ps(), bound);
+    const __m128 any_below = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, negative_bound), _mm_cmplt_ps(v, negative_bound)),
+                                       _mm_cmplt_ps(w, negative_bound));
+    const __m128 any_above =
+        _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, bound), _mm_cmpgt_ps(v, bound)), _mm_cmpgt_ps(w, bound));
+    const __m128 all_above =
+        _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(u, bound), _mm_cmpgt_ps(v, bound)), _mm_cmpgt_ps(w, bound));
+    const __m128 all_below = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(u, negative_bound), _mm_cmplt_ps(v, negative_bound)),
+                                        _mm_cmplt_ps(w, negative_bound));
+    edges.outside = _mm_movemask_ps(_mm_and_ps(any_below, any_above));
+    edges.inside = _mm_movemask_ps(_mm_or_ps(all_above, all_below));
+    _mm_store_ps(edges.u, u);
+    _mm_store_ps(edges.v, v);
+    _mm_store_ps(edges.w, w);
+}
+
+[[gnu::always_inline]] inline void pack_triangle(const TrianglePack& pack, int lane, Vec3 vertex[3]) {
+    for (int k = 0; k < 3; ++k) vertex[k] = {pack.vertex[k][0][lane], pack.vertex[k][1][lane], pack.vertex[k][2][lane]};
+}
+
+// Tests a leaf's `count` triangles (from pack `first`) in their leaf order, as the binary kernel
+// does, so a hit at equal distance resolves the same way. Returns true on a hit when kAnyHit.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool test_leaf(const WideLayout<S::kLanes>& layout, uint32_t first, uint32_t count, const Ray& ray,
+                                             const WatertightRay& shear, const PackRay& pack_ray, float& tmax, Hit& hit,
+                                             bool& found, TraversalStats* stats) {
+    for (uint32_t p = 0; p * 4 < count; ++p) {
+        const TrianglePack& pack = layout.packs[first + p];
+        const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
+        if constexpr (kStats) stats->triangles_tested += lanes;
+        TriangleHit candidate;
+        if constexpr (S::kScalarTriangles) {
+            for (uint32_t lane = 0; lane < lanes; ++lane) {
+                Vec3 vertex[3];
+                pack_triangle(pack, int(lane), vertex);
+                if (!intersect_watertight(ray, shear, vertex[0], vertex[1], vertex[2], tmax, candidate)) continue;
+                found = true;
+                if constexpr (kAnyHit) return true;
+                tmax = candidate.t;
+                hit = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+            }
+        } else {
+            PackEdges edges;
+            pack_edges(pack, pack_ray, edges);
+            unsigned candidates = unsigned(~edges.outside) & ((1u << lanes) - 1);
+            while (candidates) {
+                const int lane = __builtin_ctz(candidates);
+                candidates &= candidates - 1;
+                Vec3 vertex[3];
+                pack_triangle(pack, lane, vertex);
+                const bool crossed =
+                    (edges.inside >> lane) & 1
+                        ? finish_crossing(ray, vertex[0], vertex[1], vertex[2], tmax, edges.u[lane], edges.v[lane], edges.w[lane], candidate)
+                        : decide_exactly(ray, vertex[0], vertex[1], vertex[2], tmax, edges.u[lane], edges.v[lane], edges.w[lane], candidate);
+                if (!crossed) continue;
+                found = true;
+                if constexpr (kAnyHit) return true;
+                tmax = candidate.t;
+                hit = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+            }
+        }
+    }
+    return false;
+}
+
+template <int W>
+[[gnu::always_inline]] inline void prefetch_node(const WideNode<W>& node) {
+    for (size_t line = 0; line < sizeof(WideNode<W>); line += 64)
+        _mm_prefetch(reinterpret_cast<const char*>(&node) + line, _MM_HINT_T0);
+}
+
+// Closest hit (kAnyHit = false) or any hit. Children a ray enters are visited nearest first; entries
+// on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
+// skipped when popped.
+template <class S, bool kAnyHit, bool kStats>
+bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+    constexpr int W = S::kLanes;
+    const RayBoxes<S> boxes(ray);
+    const WatertightRay shear(ray);
+    const PackRay pack_ray(shear);
+    float tmax = ray.tmax;
+    bool found = false;
+
+    struct Entry {
+        uint32_t child, count;
+        float entry;
+    };
+    // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
+    Entry stack[(W - 1) * 1024 + 1];
+    int top = 0;
+    Entry current{0, 0, ray.tmin};
+
+    while (true) {
+        if (current.count == 0) {
+            const WideNode<W>& node = layout.nodes[current.child];
+            if constexpr (kStats)
+                for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.planes[0][slot] <= node.planes[1][slot];
+            alignas(32) float entry[W];
+            alignas(32) uint32_t slot[W];
+            const int hits = enter_children<S>(node, boxes, ray.tmin, tmax, entry, slot);
+            if (hits == 1) {
+                current = {node.child[slot[0]], node.count[slot[0]], entry[0]};
+                if (current.count == 0) prefetch_node(layout.nodes[current.child]);
+                continue;
+            }
+            if (hits > 1) {
+                if constexpr (!kAnyHit) {
+                    // Insertion sort, nearest last (ties keep slot order reversed; any order is exact).
+                    for (int i = 1; i < hits; ++i) {
+                        const float key = entry[i];
+                        const uint32_t key_slot = slot[i];
+                        int j = i - 1;
+                        while (j >= 0 && entry[j] < key) {
+                            entry[j + 1] = entry[j];
+                            slot[j + 1] = slot[j];
+                            --j;
+                        }
+                        entry[j + 1] = key;
+                        slot[j + 1] = key_slot;
+                    }
+                }
+                for (int i = 0; i < hits - 1; ++i) stack[top++] = {node.child[slot[i]], node.count[slot[i]], entry[i]};
+                current = {node.child[slot[hits - 1]], node.count[slot[hits - 1]], entry[hits - 1]};
+                if (current.count == 0) prefetch_node(layout.nodes[current.child]);
+                continue;
+            }
+        } else if (test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, ray, shear, pack_ray, tmax, hit, found,
+                                                 stats)) {
+            return true;
+        }
+        // Pop the nearest pending subtree that may still hold a closer hit.
+        do {
+            if (top == 0) return found;
+            current = stack[--top];
+        } while (!kAnyHit && current.entry > tmax);
+    }
+}

@@ -1,0 +1,116 @@
+#include "trace/wide_layout.hpp"
+
+#include <algorithm>
+
+namespace spacebvh::trace {
+namespace {
+
+template <int W>
+void set_child(WideNode<W>& node, int slot, const AABB& box, uint32_t child, uint32_t count) {
+    for (int axis = 0; axis < 3; ++axis) {
+        node.planes[2 * axis][slot] = box.lo[axis];
+        node.planes[2 * axis + 1][slot] = box.hi[axis];
+    }
+    node.child[slot] = child;
+    node.count[slot] = count;
+}
+
+template <int W>
+WideNode<W> empty_node() {
+    WideNode<W> node;
+    for (int slot = 0; slot < W; ++slot) set_child(node, slot, AABB::empty(), 0, 0);
+    return node;
+}
+
+template <int W>
+class Collapser {
+public:
+    Collapser(const Scene& scene, const Bvh& bvh, WideLayout<W>& layout) : scene_(scene), bvh_(bvh), layout_(layout) {}
+
+    // Makes the wide node for binary inner node (or, for a leaf root, a node with that one leaf) and
+    // its subtree; returns its index.
+    uint32_t make_node(uint32_t bvh_index) {
+        // The children of the wide node, as binary node indices, in left-to-right tree order.
+        std::vector<uint32_t> children;
+        const BvhNode& node = bvh_.nodes[bvh_index];
+        if (node.is_leaf()) {
+            children.push_back(bvh_index);
+        } else {
+            children = {node.first, node.first + 1};
+        }
+        while (int(children.size()) < W) {
+            int widest = -1;
+            float widest_area = -1.0f;
+            for (int i = 0; i < int(children.size()); ++i) {
+                const BvhNode& child = bvh_.nodes[children[i]];
+                if (!child.is_leaf() && child.bounds.area() > widest_area) {
+                    widest = i;
+                    widest_area = child.bounds.area();
+                }
+            }
+            if (widest < 0) break;
+            const uint32_t first = bvh_.nodes[children[widest]].first;
+            children[widest] = first;
+            children.insert(children.begin() + widest + 1, first + 1);
+        }
+
+        const uint32_t index = uint32_t(layout_.nodes.size());
+        layout_.nodes.push_back(empty_node<W>());
+        for (int slot = 0; slot < int(children.size()); ++slot) {
+            const BvhNode& child = bvh_.nodes[children[slot]];
+            if (child.is_leaf()) {
+                const auto [first, count] = add_leaf(child);
+                set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
+            } else {
+                // Recursion depth is the tree depth, which build options cap at 1024.
+                const uint32_t inner = make_node(children[slot]);
+                set_child(layout_.nodes[index], slot, child.bounds, inner, 0);
+            }
+        }
+        return index;
+    }
+
+private:
+    std::pair<uint32_t, uint32_t> add_leaf(const BvhNode& leaf) {
+        const uint32_t first_pack = uint32_t(layout_.packs.size());
+        uint32_t count = 0;
+        for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
+            const uint32_t primitive = bvh_.primitives[i];
+            const Triangle& triangle = scene_.triangles[primitive];
+            if (triangle.is_degenerate()) continue;
+            const int lane = int(count % 4);
+            if (lane == 0) layout_.packs.push_back(TrianglePack{});
+            TrianglePack& pack = layout_.packs.back();
+            const Vec3* vertices[3] = {&triangle.v0, &triangle.v1, &triangle.v2};
+            for (int k = 0; k < 3; ++k)
+                for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][lane] = (*vertices[k])[axis];
+            pack.primitive[lane] = primitive;
+            ++count;
+        }
+        return {count ? first_pack : 0, count};
+    }
+
+    const Scene& scene_;
+    const Bvh& bvh_;
+    WideLayout<W>& layout_;
+};
+
+}  // namespace
+
+template <int W>
+WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh) {
+    WideLayout<W> layout;
+    if (bvh.empty()) {
+        layout.nodes.push_back(empty_node<W>());  // nothing to hit
+        return layout;
+    }
+    layout.nodes.reserve(bvh.nodes.size() / (W - 1) + 1);
+    layout.packs.reserve(bvh.primitives.size() / 2 + 1);
+    Collapser<W>(scene, bvh, layout).make_node(0);
+    return layout;
+}
+
+template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&);
+template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&);
+
+}  // namespace spacebvh::trace

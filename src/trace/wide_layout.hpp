@@ -1,0 +1,50 @@
+// The memory layout of wide BVHs (wide_tracer.hpp) and the collapse of a binary Bvh into it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/scene.hpp"
+#include "trace/huge_page_allocator.hpp"
+
+namespace spacebvh::trace {
+
+// One node: the boxes of its (up to) W children in SoA, so one SIMD load reads one plane of all
+// children. planes[2 * axis] holds the lower bounds on `axis`, planes[2 * axis + 1] the upper ones.
+// Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters.
+// child[i]: inner child (count[i] == 0): index of its WideNode; leaf (count[i] > 0): index of its
+// first TrianglePack, holding count[i] triangles in ceil(count[i] / 4) packs.
+template <int W>
+struct alignas(64) WideNode {
+    float planes[6][W];
+    uint32_t child[W];
+    uint32_t count[W];
+};
+static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256);
+
+// Four triangles in SoA: vertex[k][axis][lane]. Lanes past the leaf's count are unused (zero).
+struct alignas(16) TrianglePack {
+    float vertex[3][3][4];
+    uint32_t primitive[4];
+};
+static_assert(sizeof(TrianglePack) == 160);
+
+template <int W>
+struct WideLayout {
+    std::vector<WideNode<W>, HugePageAllocator<WideNode<W>>> nodes;  // nodes[0] is the root
+    std::vector<TrianglePack, HugePageAllocator<TrianglePack>> packs;
+};
+
+// Collapses the binary tree: each wide node takes its binary node's two children and repeatedly opens
+// the inner child of largest surface area (the one most rays enter, by the SAH's geometric
+// probability) until it has W children or only leaves. Nodes are laid out depth first, a node's first
+// inner child right after it. Degenerate triangles are dropped (never hit); a leaf of degenerate
+// triangles only gets an empty box.
+template <int W>
+WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh);
+
+extern template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&);
+extern template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&);
+
+}  // namespace spacebvh::trace

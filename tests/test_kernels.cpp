@@ -1,0 +1,263 @@
+// The wide (BVH4/BVH8) and packet kernels (wide_tracer.hpp, packet_tracer.hpp) against the binary
+// reference kernel and the exact arbiter: every kernel on every built-in scene for random, primary
+// (row-major and in 8x8 / 16x16 tiles), diffuse rays, rays starting on surfaces and cut-off segments;
+// packets with partially inactive lanes and lost coherence; the caller's flush-to-zero mode; errors.
+// (test_tracer.cpp runs its watertightness and edge-case tests over the kernels too.)
+#include <gtest/gtest.h>
+#include <xmmintrin.h>
+
+#include <algorithm>
+#include <numeric>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/packet_tracer.hpp"
+#include "spacebvh/rays.hpp"
+#include "spacebvh/tracer.hpp"
+#include "spacebvh/verify.hpp"
+#include "spacebvh/wide_tracer.hpp"
+#include "test_support.hpp"
+
+using namespace spacebvh;
+using testing_support::cached_builtin_scene;
+using testing_support::closest_records;
+using testing_support::occlusion_records;
+
+namespace {
+
+std::vector<std::string> explicit_kernels() {
+    std::vector<std::string> kernels;
+    for (const std::string& name : kernel_names())
+        if (name.find('-') != std::string::npos) kernels.push_back(name);
+    return kernels;
+}
+
+// Ray sets of a scene: random, primary in tile order, diffuse from the primary hits, rays leaving the
+// surface points of those hits towards random points (they start on a triangle: t = 0 must not count
+// beyond tmin), and random rays cut to [tmax / 4, tmax / 2] of their closest hit.
+std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets(const Scene& scene, const BinaryTracer& reference) {
+    std::vector<std::pair<std::string, std::vector<Ray>>> sets;
+    sets.emplace_back("random", generate_random_rays(scene.bounds(), 3000, 11));
+    const uint32_t width = 64, height = 48;
+    const std::vector<Ray> row_major = generate_primary_rays(default_camera(scene), width, height);
+    std::vector<Ray> tiled;
+    for (uint32_t i : tile_order(width, height, 8)) tiled.push_back(row_major[i]);
+    sets.emplace_back("primary (8x8 tiles)", tiled);
+    std::vector<Hit> hits(row_major.size());
+    reference.intersect(row_major, hits);
+    sets.emplace_back("diffuse", generate_diffuse_rays(scene, row_major, hits, 3));
+    std::vector<Ray> from_surface;
+    SplitMix64 rng(5);
+    const AABB box = scene.bounds();
+    for (size_t i = 0; i < row_major.size(); ++i) {
+        if (!hits[i].is_hit()) continue;
+        Ray ray;
+        ray.org = row_major[i].org + row_major[i].dir * hits[i].t;
+        const Vec3 target{box.lo.x + (box.hi.x - box.lo.x) * float(rng.uniform()),
+                          box.lo.y + (box.hi.y - box.lo.y) * float(rng.uniform()),
+                          box.lo.z + (box.hi.z - box.lo.z) * float(rng.uniform())};
+        ray.dir = target - ray.org;
+        if (ray.dir == Vec3(0.0f)) continue;
+        from_surface.push_back(ray);
+    }
+    sets.emplace_back("from surfaces", from_surface);
+    std::vector<Ray> cut = sets[0].second;
+    for (Ray& ray : cut) {
+        const Hit hit = reference.intersect(ray);
+        if (hit.is_hit()) {
+            ray.tmin = hit.t / 4;
+            ray.tmax = hit.t / 2;
+        }
+    }
+    sets.emplace_back("cut segments", cut);
+    return sets;
+}
+
+class KernelsOnScene : public ::testing::TestWithParam<std::string> {};
+
+}  // namespace
+
+// Closest hits and occlusion answers of every kernel equal the binary kernel's, any disagreement settled
+// by the arbiter, on cbvh and spatial trees. Trees, rays and reference answers are made once per scene.
+TEST_P(KernelsOnScene, AnswersEqualTheReferenceKernel) {
+    const Scene& scene = cached_builtin_scene(GetParam());
+    for (const char* builder : {"cbvh", "spatial"}) {
+        const Bvh bvh = build_bvh(scene, options_for(builder));
+        const BinaryTracer reference(scene, bvh);
+        const auto sets = ray_sets(scene, reference);
+        std::vector<std::vector<HitRecord>> reference_closest, reference_occlusion;
+        for (const auto& [set_name, rays] : sets) {
+            ASSERT_GT(rays.size(), 100u) << set_name;
+            reference_closest.push_back(closest_records(reference, rays));
+            reference_occlusion.push_back(occlusion_records(reference, rays));
+        }
+        for (const std::string& kernel : explicit_kernels()) {
+            const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
+            EXPECT_EQ(tracer->name(), kernel);
+            for (size_t set = 0; set < sets.size(); ++set) {
+                const auto& [set_name, rays] = sets[set];
+                SCOPED_TRACE(std::string(builder) + ", " + kernel + ", " + set_name);
+                const auto closest =
+                    verify_against_reference(scene, rays, closest_records(*tracer, rays), reference_closest[set], false);
+                EXPECT_EQ(closest.ours_wrong, 0u);
+                EXPECT_EQ(closest.reference_wrong, 0u);
+                // Occlusion has no ties: the answers are identical.
+                const auto occlusion = occlusion_records(*tracer, rays);
+                size_t occlusion_differences = 0;
+                for (size_t i = 0; i < rays.size(); ++i)
+                    occlusion_differences += occlusion[i].is_hit() != reference_occlusion[set][i].is_hit();
+                EXPECT_EQ(occlusion_differences, 0u);
+                // Single-ray calls answer like the batch.
+                for (size_t i = 0; i < rays.size(); i += 97) {
+                    const HitRecord single = to_record(tracer->intersect(rays[i]));
+                    EXPECT_TRUE(hits_agree(single, reference_closest[set][i], rays[i], scene.diagonal())) << i;
+                    EXPECT_EQ(tracer->occluded(rays[i]), reference_occlusion[set][i].is_hit()) << i;
+                }
+            }
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(All, KernelsOnScene, ::testing::ValuesIn(builtin_scene_names()), [](const auto& info) {
+    std::string name = info.param;
+    for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return name;
+});
+
+// Packets whose lanes are partly inactive: a short last packet, empty segments (tmax < tmin), rays
+// already settled by a zero-length segment, and packets mixing direction signs (coherence lost).
+TEST(Packets, PartlyInactiveAndIncoherentPacketsMatchTheArbiter) {
+    const Scene& scene = cached_builtin_scene("interior");
+    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    std::vector<Ray> rays = generate_primary_rays(default_camera(scene), 20, 10);  // 200 rays
+    for (size_t i = 0; i < rays.size(); i += 7) rays[i].tmax = -1.0f;                 // empty segment
+    for (size_t i = 3; i < rays.size(); i += 11) rays[i].tmax = rays[i].tmin;         // a point
+    for (size_t i = 150; i < 180; ++i) rays[i].dir = -rays[i].dir;                     // mixed signs
+    for (uint32_t size : {1u, 7u, 64u, 256u}) {
+        for (NodeTest test : supported_node_tests(8)) {
+            if (test == NodeTest::sse) continue;
+            SCOPED_TRACE(std::to_string(size) + " rays per packet, " + to_string(test));
+            const PacketTracer tracer(scene, bvh, size, test);
+            const auto closest = closest_records(tracer, rays);
+            const auto occlusion = occlusion_records(tracer, rays);
+            size_t wrong = 0;
+            for (size_t i = 0; i < rays.size(); ++i) {
+                wrong += !hits_agree(closest[i], arbiter_closest_hit(scene, rays[i]), rays[i], scene.diagonal());
+                wrong += occlusion[i].is_hit() != arbiter_occlusion(scene, rays[i]).is_hit();
+                if (rays[i].tmax < rays[i].tmin) EXPECT_FALSE(closest[i].is_hit()) << i;
+            }
+            EXPECT_EQ(wrong, 0u);
+        }
+    }
+}
+
+// A caller that set flush-to-zero and denormals-are-zero (as renderers do) gets the same answers, on a
+// scene so small that its edge functions are denormal, and gets its mode back.
+TEST(Kernels, CallerFlushToZeroModeChangesNoAnswer) {
+    Scene scene = load_scene("builtin:organic");
+    for (Triangle& t : scene.triangles)
+        for (Vec3* v : {&t.v0, &t.v1, &t.v2}) *v = *v * 1e-20f;
+    const Bvh bvh = build_bvh(scene, options_for("binned"));
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 400, 3);
+    std::vector<HitRecord> truth;
+    for (const Ray& ray : rays) truth.push_back(arbiter_closest_hit(scene, ray));
+    size_t truth_hits = 0;
+    for (const HitRecord& record : truth) truth_hits += record.is_hit();
+    EXPECT_GT(truth_hits, 50u);
+    for (const std::string& kernel : {std::string("binary"), std::string("bvh4"), std::string("bvh8"), std::string("packet8")}) {
+        const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
+        std::vector<HitRecord> single;
+        const unsigned saved = _mm_getcsr();
+        _mm_setcsr(saved | 0x8040);  // FTZ | DAZ
+        for (const Ray& ray : rays) single.push_back(to_record(tracer->intersect(ray)));
+        const auto batch = closest_records(*tracer, rays);
+        const unsigned after = _mm_getcsr();
+        _mm_setcsr(saved);  // the comparisons below need the standard mode too
+        EXPECT_EQ(after & 0x8040u, 0x8040u) << kernel << " did not restore the caller's mode";
+        size_t wrong = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            wrong += !hits_agree(single[i], truth[i], rays[i], scene.diagonal());
+            wrong += !hits_agree(batch[i], truth[i], rays[i], scene.diagonal());
+        }
+        EXPECT_EQ(wrong, 0u) << kernel;
+    }
+}
+
+// The statistics count work: single-ray totals equal the batch's, and a wide node tests all its
+// children at once, so 8-wide nodes are fetched less often than binary ones on the same tree.
+TEST(Kernels, StatisticsAreConsistentAcrossKernels) {
+    const Scene& scene = cached_builtin_scene("interior");
+    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 2000, 9);
+    for (const std::string& kernel : {std::string("binary"), std::string("bvh4"), std::string("bvh8")}) {
+        const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
+        TraversalStats singles, batch;
+        for (const Ray& ray : rays) tracer->intersect(ray, singles);
+        std::vector<Hit> hits(rays.size());
+        tracer->intersect(rays, hits, &batch);
+        EXPECT_EQ(singles.nodes_visited, batch.nodes_visited) << kernel;
+        EXPECT_EQ(singles.triangles_tested, batch.triangles_tested) << kernel;
+        EXPECT_GT(batch.nodes_visited, rays.size()) << kernel;
+    }
+    const WideTracer four(scene, bvh, 4), eight(scene, bvh, 8);
+    EXPECT_LT(eight.node_count(), four.node_count());
+    EXPECT_LT(four.node_count(), bvh.nodes.size() / 2);
+}
+
+TEST(Kernels, TileOrderGroupsTilesAndIsAPermutation) {
+    const std::vector<uint32_t> order = tile_order(10, 7, 4);
+    ASSERT_EQ(order.size(), 70u);
+    std::vector<uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<uint32_t> identity(70);
+    std::iota(identity.begin(), identity.end(), 0u);
+    EXPECT_EQ(sorted, identity);
+    // The first tile is pixels x, y in [0, 4): 16 rays, then the next tile starts at x = 4.
+    for (int k = 0; k < 16; ++k) EXPECT_EQ(order[k], uint32_t((k / 4) * 10 + k % 4)) << k;
+    EXPECT_EQ(order[16], 4u);
+    EXPECT_THROW(tile_order(4, 4, 0), Error);
+}
+
+TEST(Kernels, BadChoicesAreClearErrors) {
+    const Scene& scene = cached_builtin_scene("soup");
+    const Bvh bvh = build_bvh(scene, options_for("binned"));
+    EXPECT_THROW(make_tracer("bvh16", scene, bvh), Error);
+    EXPECT_THROW(make_tracer("bvh8-sse", scene, bvh), Error);  // SSE tests 4 lanes
+    EXPECT_THROW(make_tracer("bvh4-avx2", scene, bvh), Error);
+    EXPECT_THROW(WideTracer(scene, bvh, 5), Error);
+    EXPECT_THROW(PacketTracer(scene, bvh, 0), Error);
+    EXPECT_THROW(PacketTracer(scene, bvh, 257), Error);
+    try {
+        make_tracer("warp", scene, bvh);
+        FAIL() << "no error";
+    } catch (const Error& error) {
+        EXPECT_NE(std::string(error.what()).find("bvh8"), std::string::npos) << "the message lists the kernels";
+    }
+    for (const std::string& name : kernel_names()) EXPECT_NO_THROW(make_tracer(name, scene, bvh)) << name;
+}
+
+// Empty trees and a root that is a leaf.
+TEST(Kernels, EmptyAndSingleLeafTrees) {
+    const Scene scene = testing_support::two_floors();
+    Bvh leaf_root;  // all four triangles in the root leaf
+    leaf_root.nodes.push_back({scene.bounds(), 0, 4});
+    leaf_root.primitives = {0, 1, 2, 3};
+    Ray down;
+    down.org = {0.25f, 0.5f, 1.0f};
+    down.dir = {0.0f, 0.0f, -1.0f};
+    for (const std::string& kernel : explicit_kernels()) {
+        const std::unique_ptr<Tracer> empty = make_tracer(kernel, scene, Bvh{});
+        EXPECT_FALSE(empty->intersect(down).is_hit()) << kernel;
+        EXPECT_FALSE(empty->occluded(down)) << kernel;
+        const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, leaf_root);
+        const Hit hit = tracer->intersect(down);
+        EXPECT_EQ(hit.primitive, 1u) << kernel;
+        EXPECT_FLOAT_EQ(hit.t, 1.0f) << kernel;
+        EXPECT_TRUE(tracer->occluded(down)) << kernel;
+    }
+}
