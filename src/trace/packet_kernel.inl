@@ -170,6 +170,12 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     }
                     order[j] = slot;
                 }
+                if constexpr (kAnyHit) {
+                    // Leaves last, so they are tested first (as the single-ray kernel does).
+                    int inner = 0;
+                    for (int k = 0; k < n; ++k)
+                        if (node.count[order[k]] == 0) std::swap(order[k], order[inner++]);
+                }
                 for (int k = 0; k < n - 1; ++k) stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]]};
                 current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]]};
                 if (current.count == 0) prefetch_node(layout.nodes[current.child]);

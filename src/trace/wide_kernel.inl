@@ -223,6 +223,11 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                         entry[j + 1] = key;
                         slot[j + 1] = key_slot;
                     }
+                } else {
+                    // Any hit: leaves last, so they are tested first (a hit there ends the ray at once).
+                    int inner = 0;
+                    for (int i = 0; i < hits; ++i)
+                        if (node.count[slot[i]] == 0) std::swap(slot[i], slot[inner++]), std::swap(entry[i], entry[inner - 1]);
                 }
                 for (int i = 0; i < hits - 1; ++i) stack[top++] = {node.child[slot[i]], node.count[slot[i]], entry[i]};
                 current = {node.child[slot[hits - 1]], node.count[slot[hits - 1]], entry[hits - 1]};
