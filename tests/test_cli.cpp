@@ -88,7 +88,7 @@ protected:
     fs::path dir_;
 };
 
-const char* kSubcommands[] = {"info", "build", "rays", "trace", "render", "compare"};
+const char* kSubcommands[] = {"info", "build", "rays", "trace", "render", "compare", "optimum"};
 
 bool has_png_signature(const std::string& bytes) {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
@@ -330,4 +330,24 @@ TEST_F(Cli, ThreadOptions) {
         EXPECT_EQ(r.exit_code, 0) << threads << ":\n" << r.output;
         EXPECT_NE(r.output.find("nodes"), std::string::npos) << r.output;
     }
+}
+
+// `optimum` compares every search space with the exhaustive optimum; no object-partitioning search
+// space is ever below it (their "below" column is 0). --search builds any union; bad names fail cleanly.
+TEST_F(Cli, OptimumReportAndSearchSpaceUnions) {
+    const CliResult r = run("optimum --nodes 12 --min-refs 6 --max-refs 10 --co inf --json optimum.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("object (cbvh sweep)"), std::string::npos) << r.output;
+    const nlohmann::json json = read_json("optimum.json");
+    for (const char* space : {"object (cbvh sweep)", "binned", "grid, no splitting"}) {
+        EXPECT_EQ(json["random"]["search_spaces"][space]["below_optimum"], 0) << space;
+        EXPECT_GE(json["random"]["search_spaces"][space]["mean_ratio"].get<double>(), 1.0) << space;
+    }
+    // With C_o = inf a node whose every partition overlaps has no feasible optimum and is left out.
+    EXPECT_GE(json["random"]["nodes"].get<int>(), 6);
+    EXPECT_LE(json["random"]["nodes"].get<int>(), 12);
+    const CliResult union_build = run("build builtin:soup --builder cbvh --search object,grid --co 0.5 --no-epo --quiet");
+    EXPECT_EQ(union_build.exit_code, 0) << union_build.output;
+    expect_clean_failure("build builtin:soup --search object,kd --no-epo", {"kd"});
+    expect_clean_failure("build builtin:soup --grid-max 40 --no-epo", {"grid max"});
 }

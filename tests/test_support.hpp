@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "build/reference.hpp"
 #include "spacebvh/rays.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
@@ -33,6 +34,21 @@ inline Scene two_floors() {
         scene.triangles.push_back({{0, 0, z}, {1, 1, z}, {0, 1, z}});
     }
     return scene;
+}
+
+// A node for testing split finders directly: its triangles, one reference per triangle (whole box),
+// and their summary.
+struct SmallNode {
+    std::vector<Triangle> triangles;
+    std::vector<build::Reference> references;
+    build::ReferenceSummary summary;
+};
+inline SmallNode small_node(std::vector<Triangle> triangles) {
+    SmallNode node;
+    node.triangles = std::move(triangles);
+    for (uint32_t i = 0; i < node.triangles.size(); ++i) node.references.push_back({node.triangles[i].bounds(), i});
+    node.summary = build::summarize(node.references);
+    return node;
 }
 
 inline std::vector<HitRecord> closest_records(const Tracer& tracer, std::span<const Ray> rays) {

@@ -61,6 +61,17 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
         ->capture_default_str();
     command.add_flag("--no-unsplitting", no_unsplitting, "clip every straddling reference into both children");
+    command.add_option("--search", search,
+                       "search spaces combined at every node, any union of: object (exact SAH sweep), binned "
+                       "(binned object SAH), spatial (kd planes, clipping), grid (child boxes on a grid); "
+                       "e.g. object,spatial,grid (default: the builder's own)");
+    command.add_option("--grid-resolution", grid_resolution,
+                       "R of the grid search space: G = ceil(R * N^(1/6)) cells per axis for a node of N references")
+        ->capture_default_str();
+    command.add_option("--grid-max", grid_max_cells, "largest G of the grid search space (work per node ~26 G^6)")
+        ->capture_default_str();
+    command.add_flag("--no-grid-splitting", no_grid_splitting,
+                     "grid search space without primitive splitting (a reference in neither child box is infeasible)");
 }
 
 BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
@@ -75,6 +86,10 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
     options.spatial_bins = spatial_bins;
     options.reference_budget = reference_budget;
     options.unsplitting = !no_unsplitting;
+    if (!search.empty()) options.search_spaces = parse_search_spaces(search);
+    options.grid_resolution = grid_resolution;
+    options.grid_max_cells = grid_max_cells;
+    options.grid_splitting = !no_grid_splitting;
     options.validate();
     options.builder = builder_name;
     return options;

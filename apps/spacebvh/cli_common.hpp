@@ -33,6 +33,10 @@ struct BuildCliOptions {
     uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
     float reference_budget = 1.3f;
     bool no_unsplitting = false;
+    std::string search;  // "object,spatial,grid"; empty: the builder's own search spaces
+    float grid_resolution = 1.0f;
+    uint32_t grid_max_cells = 8;
+    bool no_grid_splitting = false;
 
     void add_to(CLI::App& command, bool with_builder = true);
     BuildOptions options(const std::string& builder_name) const;
@@ -94,5 +98,6 @@ void add_rays_command(CLI::App& app);
 void add_trace_command(CLI::App& app);
 void add_render_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
+void add_optimum_command(CLI::App& app);
 
 }  // namespace spacebvh::cli

@@ -76,7 +76,8 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3,budget=1.5,bins=64": a builder with some options of its own.
+// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8": a builder with
+// some options of its own.
 struct BuilderSpec {
     std::string label;
     BuildOptions options;
@@ -93,7 +94,10 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
             else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
             else if (key == "bins") spec.options.spatial_bins = uint32_t(parse_float_or_inf(value, "bins"));
-            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins)");
+            else if (key == "search") spec.options.search_spaces = parse_search_spaces(value);
+            else if (key == "grid") spec.options.grid_resolution = parse_float_or_inf(value, "grid");
+            else if (key == "gridmax") spec.options.grid_max_cells = uint32_t(parse_float_or_inf(value, "gridmax"));
+            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins, search, grid, gridmax)");
         }
         spec.options.validate();
     }
@@ -149,7 +153,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();

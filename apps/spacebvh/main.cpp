@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
     spacebvh::cli::add_trace_command(app);
     spacebvh::cli::add_render_command(app);
     spacebvh::cli::add_compare_command(app);
+    spacebvh::cli::add_optimum_command(app);
     // CLI11 would only say "A subcommand is required": name the word it did not know.
     if (argc > 1 && argv[1][0] != '-') {
         bool known = false;

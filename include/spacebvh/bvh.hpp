@@ -41,11 +41,24 @@ enum class SearchSpace : uint32_t {
     object_sweep = 1u << 0,   // exact SAH sweep over centroid-sorted references, all axes (CBVH)
     object_binned = 1u << 1,  // binned object SAH (Wald 2007)
     spatial_binned = 1u << 2, // kd planes on B bins per axis, straddlers clipped (Stich et al. 2009)
+    // (1u << 3 is reserved for the exact spatial sweep.)
+    grid = 1u << 4,           // child boxes on a G^3 grid over the node, exact counts (Popov et al. 2009)
 };
 constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
+constexpr uint32_t operator|(uint32_t a, SearchSpace b) { return a | uint32_t(b); }
+
+// "object,binned,spatial,grid" (names separated by ',' or '+'; any union) -> SearchSpace bits:
+// object = object_sweep, binned = object_binned, spatial = spatial_binned, grid = grid. Throws Error
+// naming an unknown name, or for an empty list.
+uint32_t parse_search_spaces(const std::string& names);
+// The inverse: "object+spatial+grid".
+std::string search_space_names(uint32_t search_spaces);
 
 struct BuildOptions {
     std::string builder = "binned";  // a name from builder_names()
+    // The search spaces combined at every node (a union of SearchSpace bits); 0 = the preset's own.
+    // The rest of the preset (its default C_o, pre-splitting, unsplitting rule) stays.
+    uint32_t search_spaces = 0;
     // C_T, C_I, C_o. Use options_for(builder) to start from the preset's default C_o.
     CostModel cost;
     uint32_t max_leaf_size = 8;  // a node with more references is always split
@@ -56,6 +69,13 @@ struct BuildOptions {
     // budget is shared deterministically among subtrees and always honoured.
     float reference_budget = 1.3f;
     bool unsplitting = true;  // reference unsplitting (Stich et al. 2009) in spatial splits
+    // Grid search space: a node of N references gets G = ceil(grid_resolution * N^(1/6)) cells per axis
+    // (the slides' G = R N^(1/6)), at least 2 and at most grid_max_cells (work ~20 G^6 per node).
+    float grid_resolution = 1.0f;   // R, in (0, 64]; 1: G = 2 up to N = 64, 4 at 4096, 8 from 117650
+    uint32_t grid_max_cells = 8;    // 2..16
+    // Clip a reference that fits in neither grid child into both (only for child boxes that together
+    // cover the node; within the reference budget). Off: such configurations are infeasible.
+    bool grid_splitting = true;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;
@@ -64,7 +84,7 @@ struct BuildOptions {
     void validate() const;
 };
 
-// Named builders: "cbvh", "binned", "kdbvh", "spatial", "sbvh" (see describe_builder).
+// Named builders: "cbvh", "binned", "kdbvh", "spatial", "sbvh", "esc", "evh", "full" (see describe_builder).
 std::vector<std::string> builder_names();
 // Options with the preset's defaults (its overlap penalty C_o). Throws Error for an unknown name.
 BuildOptions options_for(const std::string& builder);

@@ -1,10 +1,13 @@
 // The named builders: each is a preset of the generic driver (search spaces + cost model).
+#include <algorithm>
 #include <sstream>
 
 #include "build/binned_object_split_finder.hpp"
 #include "build/binned_spatial_split_finder.hpp"
+#include "build/grid_split_finder.hpp"
 #include "build/object_sweep_split_finder.hpp"
 #include "build/presplit.hpp"
+#include "build/search_spaces.hpp"
 #include "build/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
@@ -40,7 +43,23 @@ constexpr BuilderPreset kPresets[] = {
      "early split clipping (Ernst & Greiner 2007) pre-splits references within the budget, then the cbvh search"},
     {"evh", uint32_t(SearchSpace::object_sweep), Presplit::edge_volume_heuristic, 0.0f, false, 0.0f,
      "edge volume heuristic (Dammertz & Keller 2008, t = 14) pre-splits triangles within the budget, then the cbvh search"},
+    {"full", SearchSpace::object_sweep | SearchSpace::spatial_binned | SearchSpace::grid, Presplit::none, kInf, false,
+     0.0f,
+     "Popov et al.'s Full search: grid (--grid-resolution, --grid-max) + kd planes + object sweep, C_o = inf"},
 };
+
+struct SearchSpaceName {
+    const char* name;
+    SearchSpace space;
+};
+constexpr SearchSpaceName kSearchSpaceNames[] = {
+    {"object", SearchSpace::object_sweep},
+    {"binned", SearchSpace::object_binned},
+    {"spatial", SearchSpace::spatial_binned},
+    {"grid", SearchSpace::grid},
+};
+constexpr uint32_t kKnownSearchSpaces = SearchSpace::object_sweep | SearchSpace::object_binned |
+                                        SearchSpace::spatial_binned | uint32_t(SearchSpace::grid);
 
 const BuilderPreset* find_preset(const std::string& name) {
     for (const BuilderPreset& preset : kPresets)
@@ -48,26 +67,72 @@ const BuilderPreset* find_preset(const std::string& name) {
     return nullptr;
 }
 
-// One place that turns a set of search spaces into split finders, for every preset. Object spaces
-// come first: the spatial gate looks at the best object split.
-std::vector<std::unique_ptr<build::SplitFinder>> make_search_spaces(const BuilderPreset& preset, const Scene& scene,
-                                                                    const BuildOptions& options) {
-    const uint32_t spaces = preset.search_spaces;
-    std::vector<std::unique_ptr<build::SplitFinder>> finders;
-    if (spaces & uint32_t(SearchSpace::object_sweep)) finders.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
+uint32_t search_spaces_of(const BuilderPreset& preset, const BuildOptions& options) {
+    return options.search_spaces ? options.search_spaces : preset.search_spaces;
+}
+
+}  // namespace
+
+namespace build {
+
+std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t spaces, std::span<const Triangle> triangles,
+                                                             const BuildOptions& options, bool allow_unsplitting,
+                                                             float spatial_gate_alpha) {
+    std::vector<std::unique_ptr<SplitFinder>> finders;
+    if (spaces & uint32_t(SearchSpace::object_sweep)) finders.push_back(std::make_unique<ObjectSweepSplitFinder>());
     if (spaces & uint32_t(SearchSpace::object_binned))
-        finders.push_back(std::make_unique<build::BinnedObjectSplitFinder>(options.object_bins));
+        finders.push_back(std::make_unique<BinnedObjectSplitFinder>(options.object_bins));
     if (spaces & uint32_t(SearchSpace::spatial_binned)) {
-        build::SpatialSearchOptions spatial;
+        SpatialSearchOptions spatial;
         spatial.bins = options.spatial_bins;
-        spatial.unsplit = options.unsplitting && preset.allow_unsplitting;
-        spatial.gate_alpha = preset.spatial_gate_alpha;
-        finders.push_back(std::make_unique<build::BinnedSpatialSplitFinder>(scene.triangles, spatial));
+        spatial.unsplit = options.unsplitting && allow_unsplitting;
+        spatial.gate_alpha = spatial_gate_alpha;
+        finders.push_back(std::make_unique<BinnedSpatialSplitFinder>(triangles, spatial));
+    }
+    if (spaces & uint32_t(SearchSpace::grid)) {
+        GridSearchOptions grid;
+        grid.resolution = options.grid_resolution;
+        grid.max_cells = options.grid_max_cells;
+        grid.split_primitives = options.grid_splitting;
+        finders.push_back(std::make_unique<GridSplitFinder>(triangles, grid));
     }
     return finders;
 }
 
-}  // namespace
+bool splits_references(uint32_t spaces, const BuildOptions& options) {
+    return (spaces & uint32_t(SearchSpace::spatial_binned)) ||
+           ((spaces & uint32_t(SearchSpace::grid)) && options.grid_splitting);
+}
+
+}  // namespace build
+
+uint32_t parse_search_spaces(const std::string& names) {
+    uint32_t spaces = 0;
+    std::string name;
+    auto take = [&] {
+        if (name.empty()) return;
+        const auto known = std::find_if(std::begin(kSearchSpaceNames), std::end(kSearchSpaceNames),
+                                        [&](const SearchSpaceName& entry) { return name == entry.name; });
+        if (known == std::end(kSearchSpaceNames))
+            throw Error("unknown search space '" + name + "' in '" + names + "' (known: object, binned, spatial, grid)");
+        spaces |= uint32_t(known->space);
+        name.clear();
+    };
+    for (char c : names) {
+        if (c == ',' || c == '+') take();
+        else if (c != ' ') name += c;
+    }
+    take();
+    if (spaces == 0) throw Error("empty list of search spaces '" + names + "' (known: object, binned, spatial, grid)");
+    return spaces;
+}
+
+std::string search_space_names(uint32_t spaces) {
+    std::string names;
+    for (const SearchSpaceName& entry : kSearchSpaceNames)
+        if (spaces & uint32_t(entry.space)) names += (names.empty() ? "" : "+") + std::string(entry.name);
+    return names;
+}
 
 std::vector<std::string> builder_names() {
     std::vector<std::string> names;
@@ -106,6 +171,13 @@ void BuildOptions::validate() const {
     if (!(reference_budget >= 1.0f && reference_budget <= 4.0f))
         throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
                     std::to_string(reference_budget));
+    if (search_spaces & ~kKnownSearchSpaces)
+        throw Error("search spaces: unknown bits in " + std::to_string(search_spaces) + " (known: object, binned, spatial, grid)");
+    if (!(grid_resolution > 0.0f && grid_resolution <= 64.0f))
+        throw Error("grid resolution R must be in (0, 64], got " + std::to_string(grid_resolution));
+    if (grid_max_cells < 2 || grid_max_cells > build::kMaxGridCells)
+        throw Error("grid max cells must be in [2, " + std::to_string(build::kMaxGridCells) + "], got " +
+                    std::to_string(grid_max_cells));
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
@@ -117,8 +189,11 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
     if (scene.triangles.size() >= (size_t(1) << 31))
         throw Error("scene '" + scene.name + "' has too many triangles (at most 2^31 - 1)");
     const BuilderPreset& preset = *find_preset(options.builder);
+    const uint32_t spaces = search_spaces_of(preset, options);
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
-                                  make_search_spaces(preset, scene, options), scene.triangles, options.progress);
+                                  build::make_search_spaces(spaces, scene.triangles, options, preset.allow_unsplitting,
+                                                            preset.spatial_gate_alpha),
+                                  scene.triangles, options.progress);
     // References: one per triangle, or the pre-split pieces (within the budget).
     std::vector<build::Reference> references;
     build::PresplitOptions presplit;
@@ -128,9 +203,8 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
         case Presplit::early_split_clipping: references = build::early_split_clipping(scene, presplit); break;
         case Presplit::edge_volume_heuristic: references = build::edge_volume_heuristic(scene, presplit); break;
     }
-    // Spatial splits may grow the references up to the budget; object splits never do.
-    const bool splits_references = preset.search_spaces & uint32_t(SearchSpace::spatial_binned);
-    const size_t capacity = splits_references
+    // Spatial and grid splits may grow the references up to the budget; object splits never do.
+    const size_t capacity = build::splits_references(spaces, options)
                                 ? size_t(double(options.reference_budget) * double(scene.triangles.size()))
                                 : references.size();
     Bvh bvh = builder.build(std::move(references), capacity);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "build/grid_split_finder.hpp"
 #include "build/object_sweep_split_finder.hpp"
 #include "build/spatial_split.hpp"
 
@@ -16,6 +17,7 @@ bool goes_left(const Reference& reference, const Split& split) {
             return split.binning.bin_of(reference.centroid(split.axis)) < split.bin;
         case SplitKind::spatial:
             return reference.bounds.hi[split.axis] <= split.position;
+        case SplitKind::grid:  // may clip: apply_grid_split
         case SplitKind::none:
             break;
     }
@@ -32,6 +34,15 @@ ChildRanges share_capacity(uint32_t capacity, uint32_t left_count, uint32_t righ
     ranges.left_capacity = left_count + left_extra;
     ranges.right_count = right_count;
     ranges.right_capacity = capacity - ranges.left_capacity;
+    return ranges;
+}
+
+// Stores the children's references at their places in the node's storage (see ChildRanges).
+ChildRanges store_children(std::span<Reference> storage, const std::vector<Reference>& left,
+                           const std::vector<Reference>& right) {
+    const ChildRanges ranges = share_capacity(uint32_t(storage.size()), uint32_t(left.size()), uint32_t(right.size()));
+    std::copy(left.begin(), left.end(), storage.begin());
+    std::copy(right.begin(), right.end(), storage.begin() + ranges.left_capacity);
     return ranges;
 }
 
@@ -88,10 +99,24 @@ ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, co
             }
         }
     }
-    const ChildRanges ranges = share_capacity(uint32_t(storage.size()), uint32_t(left.size()), uint32_t(right.size()));
-    std::copy(left.begin(), left.end(), storage.begin());
-    std::copy(right.begin(), right.end(), storage.begin() + ranges.left_capacity);
-    return ranges;
+    return store_children(storage, left, right);
+}
+
+// The finder's own assignment (place_in_grid_children), so the children get exactly the references
+// the finder counted; its clipped references fit the spare capacity by construction.
+ChildRanges apply_grid_split(std::span<Reference> storage, uint32_t count, const Split& split,
+                             std::span<const Triangle> triangles) {
+    std::vector<Reference> left, right;
+    left.reserve(split.left_count);
+    right.reserve(split.right_count);
+    for (uint32_t i = 0; i < count; ++i) {
+        const Reference& reference = storage[i];
+        const auto [left_piece, right_piece] = place_in_grid_children(reference, triangles[reference.primitive],
+                                                                      split.left_region, split.right_region);
+        if (!left_piece.bounds.is_empty()) left.push_back(left_piece);
+        if (!right_piece.bounds.is_empty()) right.push_back(right_piece);
+    }
+    return store_children(storage, left, right);
 }
 
 }  // namespace
@@ -99,6 +124,7 @@ ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, co
 ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Split& split,
                         std::span<const Triangle> triangles) {
     if (split.kind == SplitKind::spatial) return apply_spatial_split(storage, count, split, triangles);
+    if (split.kind == SplitKind::grid) return apply_grid_split(storage, count, split, triangles);
     auto middle = std::partition(storage.begin(), storage.begin() + count,
                                  [&](const Reference& reference) { return goes_left(reference, split); });
     const uint32_t left_count = uint32_t(middle - storage.begin());

@@ -21,6 +21,9 @@ enum class SplitKind : uint8_t {
     // references are clipped exactly and go to both sides (or, with unsplitting, to the cheaper one).
     // Children never overlap.
     spatial,
+    // Two child boxes on a grid over the node (GridSplitFinder): references go to the child that
+    // contains them (both: the smaller one), references in neither are clipped into both.
+    grid,
 };
 
 inline constexpr uint32_t kMaxObjectBins = 256;
@@ -50,6 +53,7 @@ struct Split {
     AABB left_bounds, right_bounds;       // boxes of the children this split makes
     uint32_t left_count = 0, right_count = 0;
     bool unsplit = false;                 // spatial: try reference unsplitting when applying
+    AABB left_region, right_region;       // grid: the child boxes references are assigned to
 
     bool is_valid() const { return kind != SplitKind::none && cost < kInfinity; }
 };
