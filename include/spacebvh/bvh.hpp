@@ -44,6 +44,9 @@ enum class SearchSpace : uint32_t {
 };
 constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
 
+// The deepest recursive cost evaluation BuildOptions accepts (the cost grows about linearly with it).
+inline constexpr uint32_t kMaxLookaheadDepth = 8;
+
 struct BuildOptions {
     std::string builder = "binned";  // a name from builder_names()
     // C_T, C_I, C_o. Use options_for(builder) to start from the preset's default C_o.
@@ -56,9 +59,18 @@ struct BuildOptions {
     // budget is shared deterministically among subtrees and always honoured.
     float reference_budget = 1.3f;
     bool unsplitting = true;  // reference unsplitting (Stich et al. 2009) in spatial splits
+    // Recursive cost evaluation (Popov et al. 2009, "use recursive cost evaluation"): choose each
+    // node's split among the search spaces' best candidates by the SAH of the subtree built greedily
+    // this many levels below the node (src/build/lookahead.hpp). 0 = the greedy local choice.
+    uint32_t lookahead_depth = 0;
+    // The candidates it compares: this many of the cheapest splits per axis and search space (1..16).
+    uint32_t lookahead_candidates = 2;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;
+    // Polled between nodes, from any thread; once it reads true, build_bvh stops and throws Cancelled
+    // (nothing leaks). May be null.
+    const std::atomic<bool>* cancel = nullptr;
 
     // Throws Error for an unknown builder or absurd parameters.
     void validate() const;
@@ -73,7 +85,7 @@ std::string describe_builder(const std::string& name);
 
 // Builds a BVH over the scene's triangles with the calling thread's oneTBB arena (limit threads with
 // tbb::global_control or a tbb::task_arena). Deterministic: the same scene and options give the same
-// tree, whatever the thread count. An empty scene throws Error.
+// tree, whatever the thread count. An empty scene throws Error; a set cancel flag throws Cancelled.
 Bvh build_bvh(const Scene& scene, const BuildOptions& options);
 
 }  // namespace spacebvh

@@ -106,6 +106,12 @@ void BuildOptions::validate() const {
     if (!(reference_budget >= 1.0f && reference_budget <= 4.0f))
         throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
                     std::to_string(reference_budget));
+    if (lookahead_depth > kMaxLookaheadDepth)
+        throw Error("lookahead depth must be in [0, " + std::to_string(kMaxLookaheadDepth) + "], got " +
+                    std::to_string(lookahead_depth));
+    if (lookahead_candidates < 1 || lookahead_candidates > 16)
+        throw Error("lookahead candidates (per axis and search space) must be in [1, 16], got " +
+                    std::to_string(lookahead_candidates));
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
@@ -117,8 +123,13 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
     if (scene.triangles.size() >= (size_t(1) << 31))
         throw Error("scene '" + scene.name + "' has too many triangles (at most 2^31 - 1)");
     const BuilderPreset& preset = *find_preset(options.builder);
+    build::DriverOptions driver;
+    driver.lookahead_depth = options.lookahead_depth;
+    driver.lookahead_candidates = options.lookahead_candidates;
+    driver.progress = options.progress;
+    driver.cancel = options.cancel;
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
-                                  make_search_spaces(preset, scene, options), scene.triangles, options.progress);
+                                  make_search_spaces(preset, scene, options), scene.triangles, std::move(driver));
     // References: one per triangle, or the pre-split pieces (within the budget).
     std::vector<build::Reference> references;
     build::PresplitOptions presplit;
