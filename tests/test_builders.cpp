@@ -793,3 +793,38 @@ TEST_P(PerBuilder, VeryDeepTreesAreTracedCorrectly) {
 
 INSTANTIATE_TEST_SUITE_P(All, PerBuilder, ::testing::ValuesIn(builder_names()), plain_name);
 INSTANTIATE_TEST_SUITE_P(Object, ObjectBuilder, ::testing::Values("cbvh", "binned"), plain_name);
+
+// ---------------------------------------------------------------------------------------------------
+// Recursive cost evaluation (BuildOptions::lookahead_depth; the choice itself is tested in
+// test_lookahead.cpp): the trees it builds are valid, answer as the arbiter does, and are the same
+// byte for byte with 1 and 2 threads.
+
+namespace {
+
+class LookaheadBuilder : public ::testing::TestWithParam<std::tuple<std::string, uint32_t>> {};
+
+std::string lookahead_name(const ::testing::TestParamInfo<std::tuple<std::string, uint32_t>>& info) {
+    return param_name(std::get<0>(info.param) + "_lookahead" + std::to_string(std::get<1>(info.param)));
+}
+
+}  // namespace
+
+TEST_P(LookaheadBuilder, TreesAreValidCorrectAndDeterministic) {
+    const auto& [builder, depth] = GetParam();
+    // cbvh: big enough for the parallel paths (subtrees and candidate pricing from 4096 references);
+    // spatial (10x slower): clipping and the budget in the priced subtrees.
+    const Scene scene = soup_prefix(builder == "cbvh" ? 6000 : 2000);
+    BuildOptions options = options_for(builder);
+    options.lookahead_depth = depth;
+    const Bvh bvh = build_in_arena(2, scene, options);
+    EXPECT_EQ(tree_violations(scene, bvh, options), "");
+    const BinaryTracer tracer(scene, bvh);
+    EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 1500, 11)), "");
+    EXPECT_EQ(first_difference(build_in_arena(1, scene, options), bvh), "") << "1 vs 2 threads";
+    RecordProperty("sah", std::to_string(tree_sah(bvh, options.cost)));
+}
+
+INSTANTIATE_TEST_SUITE_P(Lookahead, LookaheadBuilder,
+                         ::testing::Values(std::make_tuple("cbvh", 1u), std::make_tuple("cbvh", 2u),
+                                           std::make_tuple("spatial", 1u)),
+                         lookahead_name);

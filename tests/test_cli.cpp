@@ -3,8 +3,12 @@
 // PNG), and clean failures (exit code 1 or 2 with a message naming the problem, never a crash).
 #include <gtest/gtest.h>
 
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <chrono>
+#include <csignal>
 
 #include <array>
 #include <cstdio>
@@ -55,6 +59,56 @@ protected:
         size_t n;
         while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
         const int status = pclose(pipe);
+        if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+        else if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+        return result;
+    }
+
+    // Runs `spacebvh ARGS` in the test directory and sends it SIGINT (Ctrl-C) as soon as its output
+    // contains `cue`; gives up (SIGKILL, exit code -1) after `limit_seconds`.
+    CliResult run_and_interrupt(const std::vector<std::string>& args, const std::string& cue, int limit_seconds) const {
+        std::vector<std::string> words = {SPACEBVH_CLI_PATH};
+        words.insert(words.end(), args.begin(), args.end());
+        std::vector<char*> argv;
+        for (std::string& word : words) argv.push_back(word.data());
+        argv.push_back(nullptr);
+        const std::string directory = dir_.string();
+        int fds[2];
+        CliResult result;
+        if (pipe(fds) != 0) return result;
+        const pid_t pid = fork();
+        if (pid == 0) {  // only async-signal-safe calls until exec
+            dup2(fds[1], STDOUT_FILENO);
+            dup2(fds[1], STDERR_FILENO);
+            close(fds[0]);
+            close(fds[1]);
+            if (chdir(directory.c_str()) == 0) execv(argv[0], argv.data());
+            _exit(127);
+        }
+        close(fds[1]);
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(limit_seconds);
+        bool interrupted = false, killed = false;
+        char buffer[4096];
+        for (;;) {
+            pollfd readable{fds[0], POLLIN, 0};
+            if (poll(&readable, 1, 100) > 0) {
+                const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+                if (n <= 0) break;
+                result.output.append(buffer, size_t(n));
+            }
+            if (!interrupted && result.output.find(cue) != std::string::npos) {
+                kill(pid, SIGINT);
+                interrupted = true;
+            }
+            if (!killed && std::chrono::steady_clock::now() > deadline) {
+                kill(pid, SIGKILL);
+                killed = true;
+            }
+        }
+        close(fds[0]);
+        int status = 0;
+        waitpid(pid, &status, 0);
+        if (killed) return result;
         if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
         else if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
         return result;
@@ -152,6 +206,12 @@ TEST_F(Cli, BuildWritesConsistentJson) {
     EXPECT_GT(json["layout_bytes"].get<double>(), 0.0);
     EXPECT_EQ(json["cost"]["C_T"], 1.0);
     EXPECT_EQ(json["cost"]["C_I"], 1.0);
+    EXPECT_EQ(json["lookahead_depth"], 0);
+    // Peak memory: at least the scene, below the machine's physical memory.
+    const double physical_bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    EXPECT_GT(json["peak_rss_bytes"].get<double>(), 30000.0 * sizeof(Triangle));
+    EXPECT_LT(json["peak_rss_bytes"].get<double>(), physical_bytes);
+    EXPECT_NE(r.output.find("peak memory"), std::string::npos) << r.output;
     // The same tree built in-process gives the same node count.
     const Scene scene = load_scene("builtin:soup");
     EXPECT_EQ(nodes, build_bvh(scene, options_for("cbvh")).nodes.size());
@@ -281,7 +341,39 @@ TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
             }
             EXPECT_GT((*row)[kind]["closest_mrays"].get<double>(), 0.0) << name << " " << kind;
         }
+        EXPECT_GT((*row)["peak_rss_bytes"].get<double>(), 0.0) << name;
     }
+    EXPECT_GE(json["peak_rss_bytes"].get<double>(), scene["rows"][0]["peak_rss_bytes"].get<double>());
+}
+
+// `--lookahead` and `NAME@lookahead=D` build by recursive cost evaluation; the trees answer correctly.
+TEST_F(Cli, LookaheadInBuildAndCompare) {
+    const CliResult build = run("build builtin:soup --builder cbvh --lookahead 1 --no-epo --json l.json");
+    ASSERT_EQ(build.exit_code, 0) << build.output;
+    EXPECT_EQ(read_json("l.json")["lookahead_depth"], 1);
+    EXPECT_NE(build.output.find("lookahead 1"), std::string::npos) << build.output;
+    const CliResult r = run("compare builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium "
+                            "--random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo --json c.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];
+    ASSERT_EQ(rows.size(), 3u);
+    EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("cbvh@lookahead=1;candidates=1", 0), 0u) << rows[1];
+    for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
+    expect_clean_failure("build builtin:soup --lookahead 99 --no-epo", {"lookahead"});
+    expect_clean_failure("build builtin:soup --lookahead 1 --lookahead-candidates 0 --no-epo", {"candidates"});
+    expect_clean_failure("build builtin:soup --builder embree-high --lookahead 1 --no-epo", {"lookahead"});
+    expect_clean_failure("compare builtin:soup --builders 'cbvh@lookahead=-1'", {"lookahead"});
+}
+
+// Ctrl-C during a long build stops it cleanly: exit code 130 and a one-line message, no crash, no
+// hang. (--progress: progress lines on the pipe tell when the build is under way.)
+TEST_F(Cli, InterruptStopsALongBuildWithExitCode130) {
+    const CliResult r = run_and_interrupt(
+        {"build", "builtin:interior", "--builder", "spatial", "--lookahead", "2", "--no-epo", "--progress"}, "building", 120);
+    EXPECT_EQ(r.exit_code, 130) << r.output;
+    EXPECT_NE(r.output.find("stopped"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("SAH"), std::string::npos) << "the build finished instead:\n" << r.output;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
 }
 
 // Bad input fails cleanly with a message naming the problem.

@@ -2,6 +2,7 @@
 
 #include "spacebvh/tracer.hpp"
 
+#include <sys/resource.h>
 #include <tbb/info.h>
 #include <unistd.h>
 
@@ -72,6 +73,24 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
         ->capture_default_str();
     command.add_flag("--no-grid-splitting", no_grid_splitting,
                      "grid search space without primitive splitting (a reference in neither child box is infeasible)");
+    command.add_option("--lookahead", lookahead,
+                       "recursive cost evaluation: choose each split by the SAH of the subtree built this many levels "
+                       "below it (0 = greedy; slower, about 1 + depth x candidates times the search)")
+        ->capture_default_str();
+    command.add_option("--lookahead-candidates", lookahead_candidates,
+                       "candidates the lookahead compares: the cheapest splits per axis and search space")
+        ->capture_default_str();
+}
+
+uint32_t parse_unsigned(const std::string& text, const char* what) {
+    try {
+        size_t used = 0;
+        const unsigned long value = std::stoul(text, &used);
+        if (used != text.size() || text.front() == '-' || value > 0xffffffffUL) throw std::invalid_argument(text);
+        return uint32_t(value);
+    } catch (const std::exception&) {
+        throw Error(std::string(what) + ": expected a whole number >= 0, got '" + text + "'");
+    }
 }
 
 BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
@@ -90,6 +109,9 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
     options.grid_resolution = grid_resolution;
     options.grid_max_cells = grid_max_cells;
     options.grid_splitting = !no_grid_splitting;
+    options.lookahead_depth = lookahead;
+    options.lookahead_candidates = lookahead_candidates;
+    options.cancel = interrupt_flag();
     options.validate();
     options.builder = builder_name;
     return options;
@@ -98,6 +120,7 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
 void CommonOptions::add_to(CLI::App& command) {
     command.add_option("--threads,-j", threads, "worker threads (0 = all cores)")->capture_default_str();
     command.add_flag("--quiet,-q", quiet, "no progress bar");
+    command.add_flag("--progress", progress, "show progress even when stderr is not a terminal (a line every few seconds)");
     command.add_option("--json", json_path, "also write the results as JSON to this file");
 }
 
@@ -125,23 +148,51 @@ Camera CameraOptions::camera_for(const Scene& scene, const std::string& source, 
     return camera_for_scene(scene, source, transform);
 }
 
-Progress::Progress(std::string label, bool enabled)
-    : label_(std::move(label)), enabled_(enabled && isatty(STDERR_FILENO)), start_(std::chrono::steady_clock::now()) {}
+namespace {
+
+// "42s", "3m05s", "1h02m".
+std::string duration_text(double seconds) {
+    char text[32];
+    const long whole = long(seconds + 0.5);
+    if (whole < 60) std::snprintf(text, sizeof text, "%lds", whole);
+    else if (whole < 3600) std::snprintf(text, sizeof text, "%ldm%02lds", whole / 60, whole % 60);
+    else std::snprintf(text, sizeof text, "%ldh%02ldm", whole / 3600, (whole % 3600) / 60);
+    return text;
+}
+
+}  // namespace
+
+Progress::Progress(std::string label, const CommonOptions& common)
+    : label_(std::move(label)),
+      terminal_(isatty(STDERR_FILENO)),
+      enabled_(!common.quiet && (terminal_ || common.progress)),
+      start_(std::chrono::steady_clock::now()) {}
 
 Progress::~Progress() {
-    if (drawn_) std::fprintf(stderr, "\r\033[K");
+    if (drawn_ && terminal_) std::fprintf(stderr, "\r\033[K");
 }
 
 void Progress::update(double fraction) {
     if (!enabled_) return;
     const double elapsed = milliseconds_since(start_) / 1000.0;
-    if (elapsed < 1.0) return;  // only work over about a second gets a bar
+    if (terminal_ && elapsed < 1.0) return;  // only work over about a second gets a bar
     std::lock_guard lock(mutex_);
-    constexpr int kWidth = 30;
-    const int filled = int(std::clamp(fraction, 0.0, 1.0) * kWidth);
-    const double eta = fraction > 0.01 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-    std::fprintf(stderr, "\r%s [%.*s%*s] %3.0f%%  %.0fs elapsed, ~%.0fs left", label_.c_str(), filled,
-                 "##############################", kWidth - filled, "", fraction * 100.0, elapsed, eta);
+    fraction = std::clamp(fraction, 0.0, 1.0);
+    // The ETA assumes the rest goes at the average rate so far.
+    const std::string left = fraction > 0.01 ? "~" + duration_text(elapsed * (1.0 - fraction) / fraction) + " left"
+                                             : "estimating time left";
+    if (terminal_) {
+        constexpr int kWidth = 30;
+        const int filled = int(fraction * kWidth);
+        std::fprintf(stderr, "\r%s [%.*s%*s] %3.0f%%  %s elapsed, %s\033[K", label_.c_str(), filled,
+                     "##############################", kWidth - filled, "", fraction * 100.0,
+                     duration_text(elapsed).c_str(), left.c_str());
+    } else {
+        if (drawn_ && elapsed - last_line_seconds_ < 5.0 && fraction < 1.0) return;
+        last_line_seconds_ = elapsed;
+        std::fprintf(stderr, "%s %3.0f%%  %s elapsed, %s\n", label_.c_str(), fraction * 100.0,
+                     duration_text(elapsed).c_str(), left.c_str());
+    }
     std::fflush(stderr);
     drawn_ = true;
 }
@@ -151,12 +202,52 @@ std::function<void(double)> Progress::callback() {
     return [this](double fraction) { update(fraction); };
 }
 
+namespace {
+
+std::atomic<bool> interrupted{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the SIGINT handler may only touch a lock-free atomic");
+
+extern "C" void on_interrupt(int) { interrupted.store(true); }
+
+}  // namespace
+
+InterruptScope::InterruptScope() {
+    struct ::sigaction action {};
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;  // the first Ctrl-C asks; the second one kills
+    sigaction(SIGINT, &action, &previous_);
+}
+
+InterruptScope::~InterruptScope() {
+    // After a Ctrl-C the default action stays, so that a second one still kills while we unwind.
+    if (!interrupted.load()) sigaction(SIGINT, &previous_, nullptr);
+}
+
+const std::atomic<bool>* interrupt_flag() { return &interrupted; }
+
+void throw_if_interrupted() {
+    if (interrupted.load()) throw Cancelled("interrupted");
+}
+
+size_t peak_rss_bytes() {
+    struct rusage usage {};
+    if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+    return size_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
+}
+
 bool is_embree_tree(const std::string& builder) { return builder == "embree-medium" || builder == "embree-high"; }
 
 Bvh build_tree(const Scene& scene, const BuildOptions& options) {
-    if (options.builder == "embree-medium") return build_bvh_with_embree(scene, EmbreeQuality::medium, options);
-    if (options.builder == "embree-high") return build_bvh_with_embree(scene, EmbreeQuality::high, options);
-    return build_bvh(scene, options);  // our presets; reports an unknown name
+    if (is_embree_tree(options.builder) && options.lookahead_depth > 0)
+        throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
+    const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
+    Bvh bvh;
+    if (options.builder == "embree-medium") bvh = build_bvh_with_embree(scene, EmbreeQuality::medium, options);
+    else if (options.builder == "embree-high") bvh = build_bvh_with_embree(scene, EmbreeQuality::high, options);
+    else bvh = build_bvh(scene, options);  // our presets; reports an unknown name
+    throw_if_interrupted();
+    return bvh;
 }
 
 std::string builder_list() {

@@ -2,8 +2,10 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <signal.h>
 #include <tbb/global_control.h>
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -37,6 +39,7 @@ struct BuildCliOptions {
     float grid_resolution = 1.0f;
     uint32_t grid_max_cells = 8;
     bool no_grid_splitting = false;
+    uint32_t lookahead = 0, lookahead_candidates = 2;
 
     void add_to(CLI::App& command, bool with_builder = true);
     BuildOptions options(const std::string& builder_name) const;
@@ -45,6 +48,7 @@ struct BuildCliOptions {
 struct CommonOptions {
     unsigned threads = 0;  // 0: all cores
     bool quiet = false;
+    bool progress = false;  // progress lines even when stderr is not a terminal
     std::string json_path;
 
     void add_to(CLI::App& command);
@@ -61,25 +65,47 @@ struct CameraOptions {
     Camera camera_for(const Scene& scene, const std::string& source, const SceneTransform& transform) const;
 };
 
-// A progress bar on stderr for work over about a second; silent when stderr is not a terminal or
-// with --quiet. Thread-safe update().
+// Progress on stderr for work over about a second: the fraction done, the time elapsed and the
+// estimated time left. A bar redrawn in place when stderr is a terminal; with --progress also when it
+// is not (then one line every few seconds); silent with --quiet. Thread-safe update().
 class Progress {
 public:
-    Progress(std::string label, bool enabled);
+    Progress(std::string label, const CommonOptions& common);
     ~Progress();
     void update(double fraction);
     std::function<void(double)> callback();
 
 private:
     std::string label_;
+    bool terminal_;  // redraw in place
     bool enabled_;
     std::chrono::steady_clock::time_point start_;
     std::mutex mutex_;
     bool drawn_ = false;
+    double last_line_seconds_ = 0;  // when the last line was written (not on a terminal)
 };
 
 // --help text of --kernel: the kernels make_tracer knows on this CPU.
 std::string kernel_help();
+// Ctrl-C during a build, trace or compare: while an InterruptScope lives, the first SIGINT sets a
+// flag that builds (BuildOptions::cancel) and the commands' loops poll; they stop by throwing
+// Cancelled and main exits with 130. The first SIGINT also restores the default action, so a second
+// one kills the process. Outside a scope Ctrl-C kills as usual.
+class InterruptScope {
+public:
+    InterruptScope();
+    ~InterruptScope();
+    InterruptScope(const InterruptScope&) = delete;
+    InterruptScope& operator=(const InterruptScope&) = delete;
+
+private:
+    struct ::sigaction previous_ {};
+};
+const std::atomic<bool>* interrupt_flag();
+void throw_if_interrupted();  // throws Cancelled once Ctrl-C was pressed
+
+// The peak resident set of this process so far (getrusage ru_maxrss), in bytes.
+size_t peak_rss_bytes();
 
 // Our builders, plus Embree's own binary trees imported through rtcBuildBVH ("embree-medium",
 // "embree-high"), so Embree's tree quality can be measured under our kernel.
@@ -91,6 +117,7 @@ double milliseconds_since(std::chrono::steady_clock::time_point start);
 double median(std::vector<double> values);
 void write_json(const std::string& path, const nlohmann::json& json);
 float parse_float_or_inf(const std::string& text, const char* what);
+uint32_t parse_unsigned(const std::string& text, const char* what);
 
 void add_info_command(CLI::App& app);
 void add_build_command(CLI::App& app);

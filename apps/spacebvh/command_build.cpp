@@ -27,7 +27,7 @@ void add_build_command(CLI::App& app) {
         const auto limit = options->common.thread_limit();
         const Scene scene = load_scene(options->source, options->scene.transform());
         BuildOptions build_options = options->build.options(options->build.builder);
-        Progress progress("building", !options->common.quiet);
+        Progress progress("building", options->common);
         build_options.progress = progress.callback();
         const auto start = std::chrono::steady_clock::now();
         const Bvh bvh = build_tree(scene, build_options);
@@ -37,8 +37,9 @@ void add_build_command(CLI::App& app) {
 
         std::printf("scene            %s (%zu triangles)\n", scene.name.c_str(), scene.triangles.size());
         std::printf("builder          %s, %u threads\n", bvh.builder.c_str(), options->common.effective_threads());
-        std::printf("cost model       %s, max leaf %u, max depth %u\n", build_options.cost.describe().c_str(),
-                    build_options.max_leaf_size, build_options.max_depth);
+        std::printf("cost model       %s, max leaf %u, max depth %u, lookahead %u\n",
+                    build_options.cost.describe().c_str(), build_options.max_leaf_size, build_options.max_depth,
+                    build_options.lookahead_depth);
         std::printf("build            %.1f ms\n", build_ms);
         std::printf("nodes            %zu (%zu inner, %zu leaves)\n", stats.nodes, stats.inner_nodes, stats.leaves);
         std::printf("depth            max %u, mean leaf %.2f\n", stats.max_depth, stats.mean_leaf_depth);
@@ -47,6 +48,8 @@ void add_build_command(CLI::App& app) {
         std::printf("bytes            %zu tree, %zu traversal layout\n", stats.bytes, tracer.memory_bytes());
         std::printf("SAH              %.4f  (%s)\n", stats.sah, build_options.cost.describe().c_str());
         if (!options->no_epo) std::printf("EPO              %.4f\n", stats.epo);
+        const size_t peak_rss = peak_rss_bytes();
+        std::printf("peak memory      %.1f MiB (resident, whole process)\n", double(peak_rss) / (1024.0 * 1024.0));
 
         nlohmann::json json = {{"scene", scene.name},
                                {"triangles", scene.triangles.size()},
@@ -57,7 +60,9 @@ void add_build_command(CLI::App& app) {
                                          {"C_o", std::isinf(build_options.cost.overlap_penalty)
                                                      ? nlohmann::json("inf")
                                                      : nlohmann::json(build_options.cost.overlap_penalty)}}},
+                               {"lookahead_depth", build_options.lookahead_depth},
                                {"build_ms", build_ms},
+                               {"peak_rss_bytes", peak_rss},
                                {"nodes", stats.nodes},
                                {"leaves", stats.leaves},
                                {"max_depth", stats.max_depth},

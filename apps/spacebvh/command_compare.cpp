@@ -34,6 +34,7 @@ struct Row {
     std::optional<TreeStats> stats;
     std::optional<CostModel> cost;
     KindResult kinds[3];
+    size_t peak_rss_bytes = 0;  // the process's peak resident set when the row was done
 };
 
 // Median Mrays/s over `runs` timed runs of `trace` (after one warm-up run that also keeps the answers).
@@ -42,6 +43,7 @@ double measure_mrays(size_t ray_count, int runs, Trace&& trace) {
     trace();
     std::vector<double> ms;
     for (int run = 0; run < runs; ++run) {
+        throw_if_interrupted();
         const auto start = std::chrono::steady_clock::now();
         trace();
         ms.push_back(milliseconds_since(start));
@@ -76,8 +78,8 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8": a builder with
-// some options of its own.
+// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8;lookahead=2": a
+// builder with some options of its own.
 struct BuilderSpec {
     std::string label;
     BuildOptions options;
@@ -93,11 +95,14 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             const std::string key = setting.substr(0, equals), value = setting.substr(equals + 1);
             if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
             else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
-            else if (key == "bins") spec.options.spatial_bins = uint32_t(parse_float_or_inf(value, "bins"));
+            else if (key == "bins") spec.options.spatial_bins = parse_unsigned(value, "bins");
             else if (key == "search") spec.options.search_spaces = parse_search_spaces(value);
             else if (key == "grid") spec.options.grid_resolution = parse_float_or_inf(value, "grid");
-            else if (key == "gridmax") spec.options.grid_max_cells = uint32_t(parse_float_or_inf(value, "gridmax"));
-            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins, search, grid, gridmax)");
+            else if (key == "gridmax") spec.options.grid_max_cells = parse_unsigned(value, "gridmax");
+            else if (key == "lookahead") spec.options.lookahead_depth = parse_unsigned(value, "lookahead");
+            else if (key == "candidates") spec.options.lookahead_candidates = parse_unsigned(value, "candidates");
+            else throw Error("builder '" + text + "': unknown setting '" + key +
+                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates)");
         }
         spec.options.validate();
     }
@@ -153,7 +158,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();
@@ -178,6 +183,7 @@ void add_compare_command(CLI::App& app) {
 
     command->callback([options] {
         const auto limit = options->common.thread_limit();
+        const InterruptScope interrupts;  // Ctrl-C stops between measurements (and inside our builds)
         if (options->runs < 1 || options->runs > 1000) throw Error("--runs must be in [1, 1000]");
         if (options->build_runs < 1 || options->build_runs > 1000) throw Error("--build-runs must be in [1, 1000]");
         if (options->random_count == 0 || options->random_count > (size_t(1) << 31))
@@ -224,7 +230,7 @@ void add_compare_command(CLI::App& app) {
             std::vector<Row> rows;
             std::vector<Ray> ray_sets[3];
             std::vector<Ray> primary_row_major;
-            Progress progress("compare " + scene.name, !options->common.quiet);
+            Progress progress("compare " + scene.name, options->common);
             const size_t our_rows = builders.size() * kernels.size();
             const size_t row_total = our_rows + embree_rows.size() + embree_packet_rows.size();
             auto report = [&](size_t row, double within) { progress.update((double(row) + within) / double(row_total)); };
@@ -270,6 +276,7 @@ void add_compare_command(CLI::App& app) {
                         result.triangles_per_ray = double(stats.triangles_tested) / n;
                         report(b * kernels.size() + k, (int(kind) + 1) / 3.0);
                     }
+                    row.peak_rss_bytes = peak_rss_bytes();
                     row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
                                      ? row.kernels[0]
                                      : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
@@ -296,6 +303,7 @@ void add_compare_command(CLI::App& app) {
                     embree.reset();
                     embree.emplace(scene, quality);
                     build_ms.push_back(embree->build_milliseconds());
+                    throw_if_interrupted();
                 }
                 row.build_ms = median(build_ms);
                 for (RayKind kind : kKinds) {
@@ -320,6 +328,7 @@ void add_compare_command(CLI::App& app) {
                     }
                     report(our_rows + e, (int(kind) + 1) / 3.0);
                 }
+                row.peak_rss_bytes = peak_rss_bytes();
                 rows.push_back(std::move(row));
             }
 
@@ -360,7 +369,10 @@ void add_compare_command(CLI::App& app) {
                             ours ? std::to_string(row.stats->references).c_str() : "-",
                             number_or_dash(ours ? std::optional(row.stats->sah) : std::nullopt, 2).c_str(),
                             number_or_dash(ours && !options->no_epo ? std::optional(row.stats->epo) : std::nullopt, 2).c_str());
-                nlohmann::json json_row = {{"builder", row.name}, {"kernel", row.kernel}, {"build_ms", row.build_ms}};
+                nlohmann::json json_row = {{"builder", row.name},
+                                           {"kernel", row.kernel},
+                                           {"build_ms", row.build_ms},
+                                           {"peak_rss_bytes", row.peak_rss_bytes}};
                 if (row.cost) json_row["cost"] = row.cost->describe();
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
@@ -390,7 +402,8 @@ void add_compare_command(CLI::App& app) {
                 std::printf(" %s |\n", verify ? std::to_string(wrong).c_str() : "-");
                 json_rows.push_back(json_row);
             }
-            std::printf("\n");
+            std::printf("\npeak memory so far: %.1f MiB resident (whole process)\n\n",
+                        double(peak_rss_bytes()) / (1024.0 * 1024.0));
             std::fflush(stdout);
             json_scenes.push_back({{"scene", scene.name},
                                    {"source", source},
@@ -403,6 +416,7 @@ void add_compare_command(CLI::App& app) {
                                                {"C_T", cost.traversal_cost},
                                                {"C_I", cost.intersection_cost},
                                                {"runs", options->runs},
+                                               {"peak_rss_bytes", peak_rss_bytes()},
                                                {"scenes", json_scenes}});
     });
 }

@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
         // --help and --version exit 0; every usage error exits 2 (CLI11's own codes are 100+).
         const int status = app.exit(e);
         return status == 0 ? 0 : 2;
+    } catch (const spacebvh::Cancelled& e) {
+        std::fprintf(stderr, "spacebvh: stopped (%s, Ctrl-C)\n", e.what());
+        return 130;  // the shell's code for a command ended by SIGINT
     } catch (const spacebvh::Error& e) {
         std::fprintf(stderr, "spacebvh: error: %s\n", e.what());
         return 1;

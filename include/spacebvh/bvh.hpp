@@ -54,6 +54,9 @@ uint32_t parse_search_spaces(const std::string& names);
 // The inverse: "object+spatial+grid".
 std::string search_space_names(uint32_t search_spaces);
 
+// The deepest recursive cost evaluation BuildOptions accepts (the cost grows about linearly with it).
+inline constexpr uint32_t kMaxLookaheadDepth = 8;
+
 struct BuildOptions {
     std::string builder = "binned";  // a name from builder_names()
     // The search spaces combined at every node (a union of SearchSpace bits); 0 = the preset's own.
@@ -76,9 +79,18 @@ struct BuildOptions {
     // Clip a reference that fits in neither grid child into both (only for child boxes that together
     // cover the node; within the reference budget). Off: such configurations are infeasible.
     bool grid_splitting = true;
+    // Recursive cost evaluation (Popov et al. 2009, "use recursive cost evaluation"): choose each
+    // node's split among the search spaces' best candidates by the SAH of the subtree built greedily
+    // this many levels below the node (src/build/lookahead.hpp). 0 = the greedy local choice.
+    uint32_t lookahead_depth = 0;
+    // The candidates it compares: this many of the cheapest splits per axis and search space (1..16).
+    uint32_t lookahead_candidates = 2;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;
+    // Polled between nodes, from any thread; once it reads true, build_bvh stops and throws Cancelled
+    // (nothing leaks). May be null.
+    const std::atomic<bool>* cancel = nullptr;
 
     // Throws Error for an unknown builder or absurd parameters.
     void validate() const;
@@ -93,7 +105,7 @@ std::string describe_builder(const std::string& name);
 
 // Builds a BVH over the scene's triangles with the calling thread's oneTBB arena (limit threads with
 // tbb::global_control or a tbb::task_arena). Deterministic: the same scene and options give the same
-// tree, whatever the thread count. An empty scene throws Error.
+// tree, whatever the thread count. An empty scene throws Error; a set cancel flag throws Cancelled.
 Bvh build_bvh(const Scene& scene, const BuildOptions& options);
 
 }  // namespace spacebvh

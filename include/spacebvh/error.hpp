@@ -12,4 +12,11 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+// A long operation stopped because its cancellation flag was set (BuildOptions::cancel; Ctrl-C in
+// the CLI). Not a bad input: callers that asked for the stop catch it.
+class Cancelled : public Error {
+public:
+    using Error::Error;
+};
+
 }  // namespace spacebvh

@@ -81,17 +81,17 @@ struct BinGrid {
     }
 };
 
-}  // namespace
-
-Split BinnedObjectSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+// Bins the node's centroids and offers every cut between bins that beats the sink's threshold
+// (CheapestSplit or SplitCandidates).
+template <typename Sink>
+void bin_and_sweep(const NodeContext& context, const CostModel& cost, uint32_t max_bins, Sink& sink) {
     const std::span<Reference> references = context.references;
     const ReferenceSummary& node = context.summary;
-    Split best;
-    if (references.size() < 2) return best;
+    if (references.size() < 2) return;
 
     // Small nodes get fewer bins, as in Embree (heuristic_binning.h: min(B, 4 + 0.05 N)): a node of N
     // references fills at most N bins, and initialising and sweeping unused bins dominates otherwise.
-    const uint32_t bins = std::min<uint32_t>(bins_, 4 + uint32_t(references.size() / 20));
+    const uint32_t bins = std::min<uint32_t>(max_bins, 4 + uint32_t(references.size() / 20));
     std::array<ObjectBinning, 3> binning;
     for (int axis = 0; axis < 3; ++axis) {
         const float extent = node.centroid_bounds.hi[axis] - node.centroid_bounds.lo[axis];
@@ -152,20 +152,36 @@ Split BinnedObjectSplitFinder::find(const NodeContext& context, const CostModel&
             if (suffix_counts[i] == 0) break;
             const AABB left_box = to_box(left), right_box = to_box(suffix[i]);
             const float split_cost = cost.split_cost(node.bounds, left_box, left_count, right_box, suffix_counts[i]);
-            if (split_cost < best.cost) {
-                best.kind = SplitKind::object_binned;
-                best.cost = split_cost;
-                best.axis = axis;
-                best.binning = binning[axis];
-                best.bin = i;
-                best.left_bounds = left_box;
-                best.right_bounds = right_box;
-                best.left_count = left_count;
-                best.right_count = suffix_counts[i];
+            if (split_cost < sink.threshold(axis)) {
+                Split split;
+                split.kind = SplitKind::object_binned;
+                split.cost = split_cost;
+                split.axis = axis;
+                split.binning = binning[axis];
+                split.bin = i;
+                split.left_bounds = left_box;
+                split.right_bounds = right_box;
+                split.left_count = left_count;
+                split.right_count = suffix_counts[i];
+                sink.offer(split);
             }
         }
     }
-    return best;
+}
+
+}  // namespace
+
+Split BinnedObjectSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    CheapestSplit cheapest;
+    bin_and_sweep(context, cost, bins_, cheapest);
+    return cheapest.best;
+}
+
+std::vector<Split> BinnedObjectSplitFinder::find_candidates(const NodeContext& context, const CostModel& cost,
+                                                            uint32_t per_axis) const {
+    SplitCandidates candidates(per_axis);
+    bin_and_sweep(context, cost, bins_, candidates);
+    return candidates.all();
 }
 
 }  // namespace spacebvh::build

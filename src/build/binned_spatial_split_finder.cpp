@@ -69,18 +69,19 @@ struct SpatialBins {
     }
 };
 
-}  // namespace
-
-Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
-    Split best;
+// Bins the node along each axis and offers every plane that beats the sink's threshold
+// (CheapestSplit or SplitCandidates).
+template <typename Sink>
+void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<const Triangle> triangles,
+                   const SpatialSearchOptions& options, Sink& sink) {
     const std::span<Reference> references = context.references;
-    if (references.size() < 2) return best;
-    if (options_.gate_alpha > 0.0f && context.best_so_far.is_valid()) {
+    if (references.size() < 2) return;
+    if (options.gate_alpha > 0.0f && context.best_so_far.is_valid()) {
         const AABB overlap = intersect(context.best_so_far.left_bounds, context.best_so_far.right_bounds);
-        if (overlap.is_empty() || overlap.area() < options_.gate_alpha * context.root_area) return best;
+        if (overlap.is_empty() || overlap.area() < options.gate_alpha * context.root_area) return;
     }
     const AABB& node = context.summary.bounds;
-    const uint32_t bins = options_.bins;
+    const uint32_t bins = options.bins;
     for (int axis = 0; axis < 3; ++axis) {
         const float extent = node.hi[axis] - node.lo[axis];
         if (!(extent > 0.0f)) continue;
@@ -89,12 +90,12 @@ Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel
         SpatialBins grid(bins);
         constexpr size_t kParallelThreshold = 8 * 1024;
         if (references.size() < kParallelThreshold) {
-            grid.add(references, triangles_, binning);
+            grid.add(references, triangles, binning);
         } else {
             grid = tbb::parallel_reduce(
                 tbb::blocked_range<size_t>(0, references.size(), 2048), SpatialBins(bins),
                 [&](const tbb::blocked_range<size_t>& range, SpatialBins partial) {
-                    partial.add(references.subspan(range.begin(), range.size()), triangles_, binning);
+                    partial.add(references.subspan(range.begin(), range.size()), triangles, binning);
                     return partial;
                 },
                 [](SpatialBins a, const SpatialBins& b) {
@@ -123,20 +124,36 @@ Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel
             // Over this subtree's budget the plane is still a candidate: apply_split then sends the
             // straddlers it cannot duplicate whole to their cheaper side (the budget always holds).
             const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
-            if (split_cost < best.cost) {
-                best.kind = SplitKind::spatial;
-                best.cost = split_cost;
-                best.axis = axis;
-                best.position = binning.plane(i);
-                best.left_bounds = left;
-                best.right_bounds = suffix_bounds[i];
-                best.left_count = left_count;
-                best.right_count = count_right;
-                best.unsplit = options_.unsplit;
+            if (split_cost < sink.threshold(axis)) {
+                Split split;
+                split.kind = SplitKind::spatial;
+                split.cost = split_cost;
+                split.axis = axis;
+                split.position = binning.plane(i);
+                split.left_bounds = left;
+                split.right_bounds = suffix_bounds[i];
+                split.left_count = left_count;
+                split.right_count = count_right;
+                split.unsplit = options.unsplit;
+                sink.offer(split);
             }
         }
     }
-    return best;
+}
+
+}  // namespace
+
+Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    CheapestSplit cheapest;
+    bin_and_sweep(context, cost, triangles_, options_, cheapest);
+    return cheapest.best;
+}
+
+std::vector<Split> BinnedSpatialSplitFinder::find_candidates(const NodeContext& context, const CostModel& cost,
+                                                             uint32_t per_axis) const {
+    SplitCandidates candidates(per_axis);
+    bin_and_sweep(context, cost, triangles_, options_, candidates);
+    return candidates.all();
 }
 
 }  // namespace spacebvh::build

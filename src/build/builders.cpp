@@ -178,6 +178,12 @@ void BuildOptions::validate() const {
     if (grid_max_cells < 2 || grid_max_cells > build::kMaxGridCells)
         throw Error("grid max cells must be in [2, " + std::to_string(build::kMaxGridCells) + "], got " +
                     std::to_string(grid_max_cells));
+    if (lookahead_depth > kMaxLookaheadDepth)
+        throw Error("lookahead depth must be in [0, " + std::to_string(kMaxLookaheadDepth) + "], got " +
+                    std::to_string(lookahead_depth));
+    if (lookahead_candidates < 1 || lookahead_candidates > 16)
+        throw Error("lookahead candidates (per axis and search space) must be in [1, 16], got " +
+                    std::to_string(lookahead_candidates));
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
@@ -190,10 +196,15 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
         throw Error("scene '" + scene.name + "' has too many triangles (at most 2^31 - 1)");
     const BuilderPreset& preset = *find_preset(options.builder);
     const uint32_t spaces = search_spaces_of(preset, options);
+    build::DriverOptions driver;
+    driver.lookahead_depth = options.lookahead_depth;
+    driver.lookahead_candidates = options.lookahead_candidates;
+    driver.progress = options.progress;
+    driver.cancel = options.cancel;
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
                                   build::make_search_spaces(spaces, scene.triangles, options, preset.allow_unsplitting,
                                                             preset.spatial_gate_alpha),
-                                  scene.triangles, options.progress);
+                                  scene.triangles, std::move(driver));
     // References: one per triangle, or the pre-split pieces (within the budget).
     std::vector<build::Reference> references;
     build::PresplitOptions presplit;

@@ -6,13 +6,15 @@
 #include <vector>
 
 namespace spacebvh::build {
+namespace {
 
-Split ObjectSweepSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+// Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates).
+template <typename Sink>
+void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     const std::span<Reference> references = context.references;
     const ReferenceSummary& node = context.summary;
-    Split best;
     const size_t count = references.size();
-    if (count < 2) return best;
+    if (count < 2) return;
     // Right-to-left suffix boxes; reused across axes.
     std::vector<AABB> suffix_bounds(count);
     for (int axis = 0; axis < 3; ++axis) {
@@ -32,19 +34,35 @@ Split ObjectSweepSplitFinder::find(const NodeContext& context, const CostModel& 
         for (size_t i = 1; i < count; ++i) {
             left.extend(references[i - 1].bounds);
             const float split_cost = cost.split_cost(node.bounds, left, i, suffix_bounds[i], count - i);
-            if (split_cost < best.cost) {
-                best.kind = SplitKind::object_sorted;
-                best.cost = split_cost;
-                best.axis = axis;
-                best.tie = references[i];
-                best.left_bounds = left;
-                best.right_bounds = suffix_bounds[i];
-                best.left_count = uint32_t(i);
-                best.right_count = uint32_t(count - i);
+            if (split_cost < sink.threshold(axis)) {
+                Split split;
+                split.kind = SplitKind::object_sorted;
+                split.cost = split_cost;
+                split.axis = axis;
+                split.tie = references[i];
+                split.left_bounds = left;
+                split.right_bounds = suffix_bounds[i];
+                split.left_count = uint32_t(i);
+                split.right_count = uint32_t(count - i);
+                sink.offer(split);
             }
         }
     }
-    return best;
+}
+
+}  // namespace
+
+Split ObjectSweepSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
+    CheapestSplit cheapest;
+    sweep(context, cost, cheapest);
+    return cheapest.best;
+}
+
+std::vector<Split> ObjectSweepSplitFinder::find_candidates(const NodeContext& context, const CostModel& cost,
+                                                           uint32_t per_axis) const {
+    SplitCandidates candidates(per_axis);
+    sweep(context, cost, candidates);
+    return candidates.all();
 }
 
 }  // namespace spacebvh::build

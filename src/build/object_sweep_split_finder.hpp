@@ -10,6 +10,7 @@ class ObjectSweepSplitFinder final : public SplitFinder {
 public:
     const char* name() const override { return "object-sweep"; }
     Split find(const NodeContext& node, const CostModel& cost) const override;
+    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t per_axis) const override;
 };
 
 // Orders references by centroid[axis], then primitive, then bounds: a total order on the whole

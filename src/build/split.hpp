@@ -1,8 +1,11 @@
 // A split configuration chosen from a search space, and the interface every search space implements.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "build/reference.hpp"
 #include "spacebvh/cost_model.hpp"
@@ -67,6 +70,45 @@ struct NodeContext {
     const Split& best_so_far;  // the cheapest split of the search spaces evaluated before this one
 };
 
+// Where a finder's evaluation loop puts the configurations it evaluates. A finder offers a split
+// only when its cost is below threshold(axis), so the common case builds no Split at all.
+//
+// CheapestSplit keeps the one cheapest configuration (earlier offers win ties): find().
+struct CheapestSplit {
+    Split best;
+    float threshold(int /*axis*/) const { return best.cost; }
+    void offer(const Split& split) { best = split; }
+};
+
+// SplitCandidates keeps the `per_axis` cheapest configurations on each axis, cheapest first
+// (earlier offers win ties): the candidates of recursive cost evaluation (build/lookahead.hpp). Its
+// cheapest() is the split that CheapestSplit keeps for the same offers.
+class SplitCandidates {
+public:
+    explicit SplitCandidates(uint32_t per_axis) : per_axis_(std::max<uint32_t>(per_axis, 1)) {}
+    float threshold(int axis) const {
+        const std::vector<Split>& kept = axes_[axis];
+        return kept.size() < per_axis_ ? kInfinity : kept.back().cost;
+    }
+    void offer(const Split& split) {
+        std::vector<Split>& kept = axes_[split.axis];
+        if (kept.size() == per_axis_) kept.pop_back();
+        auto place = kept.end();
+        while (place != kept.begin() && split.cost < (place - 1)->cost) --place;
+        kept.insert(place, split);
+    }
+    // Axis by axis, cheapest first.
+    std::vector<Split> all() const {
+        std::vector<Split> splits;
+        for (const std::vector<Split>& kept : axes_) splits.insert(splits.end(), kept.begin(), kept.end());
+        return splits;
+    }
+
+private:
+    uint32_t per_axis_;
+    std::array<std::vector<Split>, 3> axes_;
+};
+
 // A search space: finds the lowest-cost configuration of its kind for a node. Finders may reorder
 // the node's references (e.g. sort them) but must not change them. They must be deterministic:
 // the same references in the same order give the same split, whatever the thread count.
@@ -75,6 +117,13 @@ public:
     virtual ~SplitFinder() = default;
     virtual const char* name() const = 0;
     virtual Split find(const NodeContext& node, const CostModel& cost) const = 0;
+    // The `per_axis` cheapest configurations on each axis, axis by axis and cheapest first; the first
+    // cheapest of them is find()'s split. A search space without several candidates offers find()'s.
+    virtual std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t /*per_axis*/) const {
+        Split split = find(node, cost);
+        if (!split.is_valid()) return {};
+        return {split};
+    }
 };
 
 }  // namespace spacebvh::build

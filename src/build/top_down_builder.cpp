@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <atomic>
 
+#include "build/lookahead.hpp"
 #include "build/partition.hpp"
+#include "spacebvh/error.hpp"
 
 namespace spacebvh::build {
 
@@ -25,33 +27,22 @@ struct TopDownBuilder::Impl {
     };
 
     const TopDownBuilder& builder;
+    const SplitSearch& search;
+    const Lookahead& lookahead;
     std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
     size_t input_count = 0;
-    float root_area = 0;
     std::vector<SlotNode> slots;
     std::atomic<size_t> references_in_leaves{0};
     std::atomic<size_t> next_progress_report{0};
 
-    static constexpr uint32_t kParallelSubtreeThreshold = 4096;
-
     void make_leaf(SlotNode& node) {
         node.is_leaf = true;
-        if (!builder.progress_) return;
+        if (!builder.options_.progress) return;
         const size_t done = references_in_leaves.fetch_add(node.count) + node.count;
         const size_t step = input_count / 100 + 1;
         size_t next = next_progress_report.load();
         if (done >= next && next_progress_report.compare_exchange_strong(next, done + step))
-            builder.progress_(std::min(1.0, double(done) / double(input_count)));
-    }
-
-    Split choose_split(std::span<Reference> node_references, const ReferenceSummary& summary, size_t capacity) const {
-        Split best;
-        for (const auto& search_space : builder.search_spaces_) {
-            const NodeContext context{node_references, summary, capacity, root_area, best};
-            Split candidate = search_space->find(context, builder.cost_);
-            if (candidate.cost < best.cost) best = candidate;
-        }
-        return best;
+            builder.options_.progress(std::min(1.0, double(done) / double(input_count)));
     }
 
     void build_subtree(uint32_t slot, uint32_t begin, uint32_t count, uint32_t capacity, const ReferenceSummary& summary,
@@ -60,23 +51,22 @@ struct TopDownBuilder::Impl {
         node.bounds = summary.bounds;
         node.begin = begin;
         node.count = count;
-        if (count <= 1 || depth >= builder.limits_.max_depth) return make_leaf(node);
+        if (search.must_be_leaf(count, depth)) return make_leaf(node);
+        const std::atomic<bool>* cancel = builder.options_.cancel;
+        if (cancel && cancel->load(std::memory_order_relaxed)) throw Cancelled("build cancelled");
+        // Big nodes report too (a few hundred calls in all): the first leaves may be long in coming
+        // when choosing a split is slow (a lookahead over a big node).
+        if (count >= kParallelSubtreeThreshold && builder.options_.progress)
+            builder.options_.progress(double(references_in_leaves.load()) / double(input_count));
 
         std::span<Reference> storage(references.data() + begin, capacity);
-        std::span<Reference> node_references = storage.first(count);
-        Split split = choose_split(node_references, summary, capacity);
-        const bool must_split = count > builder.limits_.max_leaf_size;
-        const bool split_pays = split.is_valid() && split.cost < builder.cost_.leaf_cost(count);
-        if (!must_split && !split_pays) return make_leaf(node);
-        if (!split.is_valid()) split = median_split(node_references, summary);
-
-        ChildRanges children = apply_split(storage, count, split, builder.triangles_);
-        if (children.left_count == 0 || children.right_count == 0) {
-            // Cannot happen for the finders' own splits; guard against float surprises anyway.
-            split = median_split(node_references, summary);
-            children = apply_split(storage, count, split, builder.triangles_);
-            if (children.left_count == 0 || children.right_count == 0) return make_leaf(node);
-        }
+        std::optional<Split> split = builder.options_.lookahead_depth == 0
+                                         ? search.greedy_decision(storage.first(count), summary, capacity)
+                                         : lookahead.choose(storage, count, summary, depth).split;
+        if (!split) return make_leaf(node);
+        const std::optional<ChildRanges> applied = search.apply(storage, count, *split, summary);
+        if (!applied) return make_leaf(node);
+        const ChildRanges& children = *applied;
         const uint32_t right_begin = begin + children.left_capacity;
         const ReferenceSummary left_summary = summarize({references.data() + begin, children.left_count});
         const ReferenceSummary right_summary = summarize({references.data() + right_begin, children.right_count});
@@ -125,27 +115,28 @@ struct TopDownBuilder::Impl {
 
 TopDownBuilder::TopDownBuilder(CostModel cost, BuildLimits limits,
                                std::vector<std::unique_ptr<SplitFinder>> search_spaces,
-                               std::span<const Triangle> triangles, std::function<void(double)> progress)
+                               std::span<const Triangle> triangles, DriverOptions options)
     : cost_(cost),
       limits_(limits),
       search_spaces_(std::move(search_spaces)),
       triangles_(triangles),
-      progress_(std::move(progress)) {}
+      options_(std::move(options)) {}
 
 TopDownBuilder::~TopDownBuilder() = default;
 
 Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
-    Impl impl{*this, std::move(references)};
-    const size_t count = impl.references.size();
+    const size_t count = references.size();
     Bvh bvh;
     bvh.cost = cost_;
     if (count == 0) return bvh;
     capacity = std::max(capacity, count);
+    const ReferenceSummary root = summarize(references);
+    const SplitSearch search(cost_, limits_, search_spaces_, triangles_, root.bounds.area());
+    const Lookahead lookahead(search, options_.lookahead_depth, options_.lookahead_candidates, options_.cancel);
+    Impl impl{*this, search, lookahead, std::move(references)};
     impl.input_count = count;
     impl.references.resize(capacity);
     impl.slots.resize(2 * capacity - 1);
-    const ReferenceSummary root = summarize({impl.references.data(), count});
-    impl.root_area = root.bounds.area();
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);
 
     bvh.nodes.reserve(2 * capacity - 1);
@@ -153,7 +144,7 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     bvh.nodes.resize(1);
     impl.emit(0, 0, bvh);
     bvh.nodes.shrink_to_fit();
-    if (progress_) progress_(1.0);
+    if (options_.progress) options_.progress(1.0);
     return bvh;
 }
 

@@ -1,27 +1,34 @@
 // The generic top-down driver (Popov et al. 2009, "The Generic Algorithm"): at each node, evaluate
 // every configured search space, take the configuration of lowest cost under the cost model, and make
-// a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit).
+// a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit) -
+// the greedy step of build/split_search.hpp - or, with a lookahead depth, choose among the search
+// spaces' best candidates by recursive cost evaluation (build/lookahead.hpp).
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <vector>
 
 #include "build/reference.hpp"
 #include "build/split.hpp"
+#include "build/split_search.hpp"
 #include "spacebvh/bvh.hpp"
 
 namespace spacebvh::build {
 
-struct BuildLimits {
-    uint32_t max_leaf_size = 8;
-    uint32_t max_depth = 64;
+// How the driver chooses splits and reports (all optional).
+struct DriverOptions {
+    uint32_t lookahead_depth = 0;               // recursive cost evaluation (build/lookahead.hpp); 0 = greedy
+    uint32_t lookahead_candidates = 2;          // its candidates per axis and search space
+    std::function<void(double)> progress;       // fraction of references that reached a leaf
+    const std::atomic<bool>* cancel = nullptr;  // polled between nodes; when set, build() throws Cancelled
 };
 
 class TopDownBuilder {
 public:
     TopDownBuilder(CostModel cost, BuildLimits limits, std::vector<std::unique_ptr<SplitFinder>> search_spaces,
-                   std::span<const Triangle> triangles, std::function<void(double)> progress = {});
+                   std::span<const Triangle> triangles, DriverOptions options = {});
     ~TopDownBuilder();
 
     // Builds over the references (consumed). `capacity` (>= references.size()) is the reference
@@ -35,7 +42,7 @@ private:
     BuildLimits limits_;
     std::vector<std::unique_ptr<SplitFinder>> search_spaces_;
     std::span<const Triangle> triangles_;
-    std::function<void(double)> progress_;
+    DriverOptions options_;
 };
 
 }  // namespace spacebvh::build

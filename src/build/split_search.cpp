@@ -1,0 +1,58 @@
+#include "build/split_search.hpp"
+
+#include <algorithm>
+
+namespace spacebvh::build {
+
+Split SplitSearch::cheapest(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity) const {
+    Split best;
+    for (const auto& search_space : search_spaces_) {
+        const NodeContext context{references, summary, capacity, root_area_, best};
+        Split candidate = search_space->find(context, cost_);
+        if (candidate.cost < best.cost) best = candidate;
+    }
+    return best;
+}
+
+std::vector<Split> SplitSearch::candidates(std::span<Reference> references, const ReferenceSummary& summary,
+                                           size_t capacity, uint32_t per_axis) const {
+    // The same walk as cheapest(): each space sees the cheapest split of the spaces before it (the
+    // spatial gate reads it), and the first cheapest candidate is cheapest()'s split.
+    Split best;
+    size_t best_index = 0;
+    std::vector<Split> all;
+    for (const auto& search_space : search_spaces_) {
+        const NodeContext context{references, summary, capacity, root_area_, best};
+        for (const Split& candidate : search_space->find_candidates(context, cost_, per_axis)) {
+            if (candidate.cost < best.cost) {
+                best = candidate;
+                best_index = all.size();
+            }
+            all.push_back(candidate);
+        }
+    }
+    if (!all.empty()) std::rotate(all.begin(), all.begin() + best_index, all.begin() + best_index + 1);
+    return all;
+}
+
+std::optional<Split> SplitSearch::greedy_decision(std::span<Reference> references, const ReferenceSummary& summary,
+                                                  size_t capacity) const {
+    const size_t count = references.size();
+    const Split split = cheapest(references, summary, capacity);
+    const bool split_pays = split.is_valid() && split.cost < cost_.leaf_cost(count);
+    if (!must_split(count) && !split_pays) return std::nullopt;
+    if (!split.is_valid()) return median_split(references, summary);
+    return split;
+}
+
+std::optional<ChildRanges> SplitSearch::apply(std::span<Reference> storage, uint32_t count, Split& split,
+                                              const ReferenceSummary& summary) const {
+    ChildRanges children = apply_split(storage, count, split, triangles_);
+    if (children.left_count != 0 && children.right_count != 0) return children;
+    split = median_split(storage.first(count), summary);
+    children = apply_split(storage, count, split, triangles_);
+    if (children.left_count != 0 && children.right_count != 0) return children;
+    return std::nullopt;
+}
+
+}  // namespace spacebvh::build

@@ -1,0 +1,256 @@
+// Recursive cost evaluation (src/build/lookahead.hpp) and what it rests on: the search spaces'
+// candidate lists (SplitFinder::find_candidates), the candidates of all search spaces
+// (SplitSearch::candidates), the pricing of a candidate's subtree, and cancellation of a build.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "build/binned_object_split_finder.hpp"
+#include "build/binned_spatial_split_finder.hpp"
+#include "build/lookahead.hpp"
+#include "build/object_sweep_split_finder.hpp"
+#include "build/partition.hpp"
+#include "build/split_search.hpp"
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/error.hpp"
+#include "test_support.hpp"
+
+namespace spacebvh {
+namespace {
+
+using build::Reference;
+using build::ReferenceSummary;
+using build::Split;
+
+// Nodes to search: random samples of the soup's and the interior's references (a sample of a scene
+// is a node whose references are spread like a real node's), from tiny to a few thousand.
+struct TestNode {
+    const Scene* scene;
+    std::vector<Reference> references;
+};
+
+std::vector<TestNode> test_nodes() {
+    std::vector<TestNode> nodes;
+    std::mt19937 random(7);
+    for (const char* name : {"soup", "interior"}) {
+        const Scene& scene = testing_support::cached_builtin_scene(name);
+        const std::vector<Reference> all = build::make_references(scene);
+        for (size_t count : {2, 3, 9, 40, 300, 2500}) {
+            TestNode node{&scene, {}};
+            std::sample(all.begin(), all.end(), std::back_inserter(node.references), count, random);
+            nodes.push_back(std::move(node));
+        }
+    }
+    return nodes;
+}
+
+bool same_split(const Split& a, const Split& b) {
+    return a.kind == b.kind && a.cost == b.cost && a.axis == b.axis && a.left_count == b.left_count &&
+           a.right_count == b.right_count && a.left_bounds == b.left_bounds && a.right_bounds == b.right_bounds &&
+           a.position == b.position && a.bin == b.bin && a.tie.primitive == b.tie.primitive &&
+           a.tie.bounds == b.tie.bounds;
+}
+
+std::vector<std::unique_ptr<build::SplitFinder>> every_search_space(const Scene& scene, float gate_alpha = 0.0f) {
+    std::vector<std::unique_ptr<build::SplitFinder>> spaces;
+    spaces.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
+    spaces.push_back(std::make_unique<build::BinnedObjectSplitFinder>(32));
+    build::SpatialSearchOptions spatial;
+    spatial.gate_alpha = gate_alpha;
+    spaces.push_back(std::make_unique<build::BinnedSpatialSplitFinder>(scene.triangles, spatial));
+    return spaces;
+}
+
+}  // namespace
+
+// Every search space's candidate list: at most K per axis, axis by axis and cheapest first, and its
+// first cheapest split is exactly find()'s. For the exact sweep, the K costs per axis are the K
+// smallest of all cuts of the centroid order (computed here from the definition).
+TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
+    const CostModel cost;
+    size_t checked = 0;
+    for (TestNode& node : test_nodes()) {
+        const ReferenceSummary summary = build::summarize(node.references);
+        for (const auto& space : every_search_space(*node.scene)) {
+            for (uint32_t per_axis : {1u, 2u, 5u}) {
+                SCOPED_TRACE(std::string(space->name()) + ", " + std::to_string(node.references.size()) +
+                             " references, K = " + std::to_string(per_axis));
+                std::vector<Reference> a = node.references, b = node.references;
+                const Split none;
+                const Split found = space->find({a, summary, a.size(), summary.bounds.area(), none}, cost);
+                const std::vector<Split> candidates =
+                    space->find_candidates({b, summary, b.size(), summary.bounds.area(), none}, cost, per_axis);
+                ASSERT_EQ(found.is_valid(), !candidates.empty());
+                if (candidates.empty()) continue;
+                const auto first_cheapest = std::min_element(
+                    candidates.begin(), candidates.end(), [](const Split& x, const Split& y) { return x.cost < y.cost; });
+                EXPECT_TRUE(same_split(*first_cheapest, found));
+                std::vector<float> costs_on_axis[3];
+                for (size_t i = 0; i < candidates.size(); ++i) {
+                    EXPECT_TRUE(candidates[i].is_valid());
+                    if (i > 0) EXPECT_GE(candidates[i].axis, candidates[i - 1].axis) << "axis by axis";
+                    costs_on_axis[candidates[i].axis].push_back(candidates[i].cost);
+                }
+                for (int axis = 0; axis < 3; ++axis) {
+                    EXPECT_LE(costs_on_axis[axis].size(), per_axis);
+                    EXPECT_TRUE(std::is_sorted(costs_on_axis[axis].begin(), costs_on_axis[axis].end()));
+                }
+                if (std::string(space->name()) != "object-sweep") continue;
+                for (int axis = 0; axis < 3; ++axis) {
+                    std::vector<Reference> sorted = node.references;
+                    std::sort(sorted.begin(), sorted.end(), build::CentroidOrder{axis});
+                    std::vector<float> all_cuts;
+                    if (summary.centroid_bounds.lo[axis] != summary.centroid_bounds.hi[axis]) {
+                        std::vector<AABB> right(sorted.size());  // right[i]: box of sorted[i..]
+                        for (size_t i = sorted.size(); i-- > 0;)
+                            right[i] = merge(sorted[i].bounds, i + 1 < sorted.size() ? right[i + 1] : AABB{});
+                        AABB left;
+                        for (size_t i = 1; i < sorted.size(); ++i) {
+                            left.extend(sorted[i - 1].bounds);
+                            all_cuts.push_back(cost.split_cost(summary.bounds, left, i, right[i], sorted.size() - i));
+                        }
+                    }
+                    std::sort(all_cuts.begin(), all_cuts.end());
+                    all_cuts.resize(std::min<size_t>(all_cuts.size(), per_axis));
+                    EXPECT_EQ(costs_on_axis[axis], all_cuts) << "axis " << axis;
+                }
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(checked, 20u);
+}
+
+// The candidates of all search spaces start with the greedy split (what the driver takes without a
+// lookahead), also when the spatial gate reads the cheapest split of the spaces before it.
+TEST(SplitSearch, CandidatesStartWithTheCheapestSplit) {
+    for (float gate_alpha : {0.0f, 1e-5f}) {
+        for (float overlap_penalty : {0.0f, 1.0f, kInfinity}) {
+            CostModel cost;
+            cost.overlap_penalty = overlap_penalty;
+            for (TestNode& node : test_nodes()) {
+                const auto spaces = every_search_space(*node.scene, gate_alpha);
+                const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
+                const ReferenceSummary summary = build::summarize(node.references);
+                std::vector<Reference> a = node.references, b = node.references;
+                const Split cheapest = search.cheapest(a, summary, a.size());
+                const std::vector<Split> candidates = search.candidates(b, summary, b.size(), 2);
+                ASSERT_EQ(cheapest.is_valid(), !candidates.empty());
+                if (!candidates.empty()) {
+                    EXPECT_TRUE(same_split(candidates.front(), cheapest));
+                    for (const Split& candidate : candidates) EXPECT_GE(candidate.cost, cheapest.cost);
+                }
+            }
+        }
+    }
+}
+
+// The lookahead's choice: never priced above the greedy decision; the greedy decision priced as the
+// greedy subtree of the node; and, one level deep, by the definition: C_T*SA(N) plus, per child, its
+// leaf cost or its cheapest split's local cost (whichever the greedy step takes), area-weighted.
+TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
+    CostModel cost;
+    cost.overlap_penalty = 1.0f;
+    size_t non_greedy = 0, compared = 0;
+    for (TestNode& node : test_nodes()) {
+        const auto spaces = every_search_space(*node.scene);
+        const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
+        const uint32_t count = uint32_t(node.references.size());
+        const ReferenceSummary summary = build::summarize(node.references);
+        const size_t capacity = count + count / 4;  // room for spatial splits
+        auto storage_of = [&] {
+            std::vector<Reference> storage = node.references;
+            storage.resize(capacity);
+            return storage;
+        };
+        for (uint32_t depth : {1u, 2u}) {
+            SCOPED_TRACE(std::to_string(count) + " references, lookahead " + std::to_string(depth));
+            const build::Lookahead lookahead(search, depth, 2, nullptr);
+            std::vector<Reference> storage = storage_of();
+            const build::LookaheadChoice choice = lookahead.choose(storage, count, summary, 0);
+            EXPECT_LE(choice.cost, choice.greedy_cost);
+            EXPECT_GT(choice.options, 1u);
+            non_greedy += !choice.greedy;
+            ++compared;
+
+            std::vector<Reference> greedy_storage = storage_of();
+            const double greedy_subtree = lookahead.greedy_subtree_cost(greedy_storage, count, summary, 0, depth);
+            EXPECT_EQ(choice.greedy_cost, greedy_subtree);
+            if (choice.greedy) EXPECT_EQ(choice.cost, greedy_subtree);
+
+            if (depth != 1) continue;
+            std::vector<Reference> manual = storage_of();
+            std::optional<Split> greedy = search.greedy_decision(std::span(manual).first(count), summary, capacity);
+            ASSERT_TRUE(greedy.has_value());  // these nodes are worth splitting at the root
+            const build::ChildRanges children = build::apply_split(manual, count, *greedy, node.scene->triangles);
+            double expected = double(cost.traversal_cost) * summary.bounds.area();
+            const std::pair<uint32_t, uint32_t> ranges[2] = {{0, children.left_count},
+                                                             {children.left_capacity, children.right_count}};
+            const uint32_t capacities[2] = {children.left_capacity, children.right_capacity};
+            for (int side = 0; side < 2; ++side) {
+                std::span<Reference> child(manual.data() + ranges[side].first, ranges[side].second);
+                const ReferenceSummary child_summary = build::summarize(child);
+                const double area = child_summary.bounds.area();
+                double local = cost.leaf_cost(child.size()) * area;
+                if (child.size() > 1) {
+                    const Split split = search.cheapest(child, child_summary, capacities[side]);
+                    if (split.is_valid() && (split.cost < cost.leaf_cost(child.size()) || search.must_split(child.size())))
+                        local = double(split.cost) * area;
+                }
+                expected += local;
+            }
+            EXPECT_NEAR(choice.greedy_cost, expected, 1e-9 * expected);
+        }
+    }
+    EXPECT_GT(compared, 0u);
+    RecordProperty("non_greedy_choices", std::to_string(non_greedy) + " of " + std::to_string(compared));
+}
+
+TEST(Lookahead, InvalidSettingsAreRejected) {
+    BuildOptions options = options_for("cbvh");
+    options.lookahead_depth = kMaxLookaheadDepth + 1;
+    EXPECT_THROW(options.validate(), Error);
+    options.lookahead_depth = 1;
+    options.lookahead_candidates = 0;
+    EXPECT_THROW(options.validate(), Error);
+    options.lookahead_candidates = 3;
+    EXPECT_NO_THROW(options.validate());
+}
+
+// Cancellation: a flag set while the build runs (here from the progress callback, once the first
+// leaves are done) stops it with Cancelled, greedy or with a lookahead, serial or parallel; a set
+// flag stops a build before it starts; and the next build with the flag clear is unharmed.
+TEST(Cancellation, FlagSetDuringTheBuildThrowsCancelled) {
+    Scene scene = testing_support::cached_builtin_scene("soup");
+    scene.triangles.resize(10000);  // more than one parallel subtree
+    for (const char* builder : {"cbvh", "spatial"}) {
+        for (uint32_t lookahead : {0u, 1u}) {
+            SCOPED_TRACE(std::string(builder) + " lookahead " + std::to_string(lookahead));
+            std::atomic<bool> cancel{false};
+            std::atomic<int> reports{0};
+            BuildOptions options = options_for(builder);
+            options.lookahead_depth = lookahead;
+            options.cancel = &cancel;
+            options.progress = [&](double fraction) {
+                reports++;
+                if (fraction < 1.0) cancel = true;
+            };
+            EXPECT_THROW(build_bvh(scene, options), Cancelled);
+            EXPECT_GE(reports.load(), 1);
+            EXPECT_LT(reports.load(), 50) << "the build went on long after the flag was set";
+        }
+    }
+    std::atomic<bool> cancel{true};
+    BuildOptions options = options_for("binned");
+    options.cancel = &cancel;
+    EXPECT_THROW(build_bvh(scene, options), Cancelled);
+    cancel = false;
+    const Bvh bvh = build_bvh(scene, options);
+    EXPECT_EQ(bvh.primitives.size(), scene.triangles.size());
+}
+
+}  // namespace spacebvh
