@@ -59,6 +59,11 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
         ->capture_default_str();
     command.add_flag("--no-unsplitting", no_unsplitting, "clip every straddling reference into both children");
+    command.add_flag("--spatial-sweep", spatial_sweep,
+                     "kd planes at every reference bound with exact child boxes (the sweep) instead of --spatial-bins bins");
+    command.add_option("--sweep-samples", sweep_samples,
+                       "spatial sweep: positions sampled inside the intervals next to the best event planes (0 = events only)")
+        ->capture_default_str();
 }
 
 BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
@@ -73,6 +78,8 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
     options.spatial_bins = spatial_bins;
     options.reference_budget = reference_budget;
     options.unsplitting = !no_unsplitting;
+    options.exact_spatial_sweep = spatial_sweep;
+    options.sweep_interior_samples = sweep_samples;
     options.validate();
     options.builder = builder_name;
     return options;

@@ -33,6 +33,8 @@ struct BuildCliOptions {
     uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
     float reference_budget = 1.3f;
     bool no_unsplitting = false;
+    bool spatial_sweep = false;
+    uint32_t sweep_samples = 0;
 
     void add_to(CLI::App& command, bool with_builder = true);
     BuildOptions options(const std::string& builder_name) const;

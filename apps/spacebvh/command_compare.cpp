@@ -87,7 +87,9 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
             else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
             else if (key == "bins") spec.options.spatial_bins = uint32_t(parse_float_or_inf(value, "bins"));
-            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins)");
+            else if (key == "sweep") spec.options.exact_spatial_sweep = parse_float_or_inf(value, "sweep") != 0.0f;
+            else if (key == "samples") spec.options.sweep_interior_samples = uint32_t(parse_float_or_inf(value, "samples"));
+            else throw Error("builder '" + text + "': unknown setting '" + key + "' (co, budget, bins, sweep, samples)");
         }
         spec.options.validate();
     }
@@ -123,7 +125,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;sweep=1;samples=K; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();

@@ -41,6 +41,7 @@ enum class SearchSpace : uint32_t {
     object_sweep = 1u << 0,   // exact SAH sweep over centroid-sorted references, all axes (CBVH)
     object_binned = 1u << 1,  // binned object SAH (Wald 2007)
     spatial_binned = 1u << 2, // kd planes on B bins per axis, straddlers clipped (Stich et al. 2009)
+    spatial_sweep = 1u << 3,  // kd planes at every reference bound event, exact child boxes (Popov et al. 2009)
 };
 constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
 
@@ -56,6 +57,13 @@ struct BuildOptions {
     // budget is shared deterministically among subtrees and always honoured.
     float reference_budget = 1.3f;
     bool unsplitting = true;  // reference unsplitting (Stich et al. 2009) in spatial splits
+    // Presets with spatial search (kdbvh, spatial, sbvh) evaluate kd planes at every reference bound
+    // event with exact child boxes (SearchSpace::spatial_sweep) instead of on --spatial-bins bins.
+    // Off by default: measured not to pay for its build time (bench/SWEEP_RESULTS.md).
+    bool exact_spatial_sweep = false;
+    // Exact sweep: positions sampled inside the intervals next to the best event planes (0..64;
+    // 0 = event planes only). See src/build/spatial_sweep_split_finder.hpp.
+    uint32_t sweep_interior_samples = 0;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "build/spatial_split.hpp"
 #include "spacebvh/clip.hpp"
 
 namespace spacebvh::build {
@@ -75,10 +76,7 @@ Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel
     Split best;
     const std::span<Reference> references = context.references;
     if (references.size() < 2) return best;
-    if (options_.gate_alpha > 0.0f && context.best_so_far.is_valid()) {
-        const AABB overlap = intersect(context.best_so_far.left_bounds, context.best_so_far.right_bounds);
-        if (overlap.is_empty() || overlap.area() < options_.gate_alpha * context.root_area) return best;
-    }
+    if (spatial_search_gated_off(context, options_.gate_alpha)) return best;
     const AABB& node = context.summary.bounds;
     const uint32_t bins = options_.bins;
     for (int axis = 0; axis < 3; ++axis) {
@@ -123,17 +121,9 @@ Split BinnedSpatialSplitFinder::find(const NodeContext& context, const CostModel
             // Over this subtree's budget the plane is still a candidate: apply_split then sends the
             // straddlers it cannot duplicate whole to their cheaper side (the budget always holds).
             const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
-            if (split_cost < best.cost) {
-                best.kind = SplitKind::spatial;
-                best.cost = split_cost;
-                best.axis = axis;
-                best.position = binning.plane(i);
-                best.left_bounds = left;
-                best.right_bounds = suffix_bounds[i];
-                best.left_count = left_count;
-                best.right_count = count_right;
-                best.unsplit = options_.unsplit;
-            }
+            if (split_cost < best.cost)
+                best = spatial_split(split_cost, axis, binning.plane(i), left, left_count, suffix_bounds[i], count_right,
+                                     options_.unsplit);
         }
     }
     return best;

@@ -5,6 +5,7 @@
 #include "build/binned_spatial_split_finder.hpp"
 #include "build/object_sweep_split_finder.hpp"
 #include "build/presplit.hpp"
+#include "build/spatial_sweep_split_finder.hpp"
 #include "build/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
@@ -52,7 +53,10 @@ const BuilderPreset* find_preset(const std::string& name) {
 // come first: the spatial gate looks at the best object split.
 std::vector<std::unique_ptr<build::SplitFinder>> make_search_spaces(const BuilderPreset& preset, const Scene& scene,
                                                                     const BuildOptions& options) {
-    const uint32_t spaces = preset.search_spaces;
+    uint32_t spaces = preset.search_spaces;
+    // The exact sweep instead of bins: same planes' rule, every event a candidate (bench/SWEEP_RESULTS.md).
+    if (options.exact_spatial_sweep && (spaces & uint32_t(SearchSpace::spatial_binned)))
+        spaces = (spaces & ~uint32_t(SearchSpace::spatial_binned)) | uint32_t(SearchSpace::spatial_sweep);
     std::vector<std::unique_ptr<build::SplitFinder>> finders;
     if (spaces & uint32_t(SearchSpace::object_sweep)) finders.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
     if (spaces & uint32_t(SearchSpace::object_binned))
@@ -63,6 +67,13 @@ std::vector<std::unique_ptr<build::SplitFinder>> make_search_spaces(const Builde
         spatial.unsplit = options.unsplitting && preset.allow_unsplitting;
         spatial.gate_alpha = preset.spatial_gate_alpha;
         finders.push_back(std::make_unique<build::BinnedSpatialSplitFinder>(scene.triangles, spatial));
+    }
+    if (spaces & uint32_t(SearchSpace::spatial_sweep)) {
+        build::SpatialSweepOptions sweep;
+        sweep.unsplit = options.unsplitting && preset.allow_unsplitting;
+        sweep.interior_samples = options.sweep_interior_samples;
+        sweep.gate_alpha = preset.spatial_gate_alpha;
+        finders.push_back(std::make_unique<build::SpatialSweepSplitFinder>(scene.triangles, sweep));
     }
     return finders;
 }
@@ -106,6 +117,8 @@ void BuildOptions::validate() const {
     if (!(reference_budget >= 1.0f && reference_budget <= 4.0f))
         throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
                     std::to_string(reference_budget));
+    if (sweep_interior_samples > 64)
+        throw Error("sweep interior samples must be in [0, 64], got " + std::to_string(sweep_interior_samples));
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
