@@ -396,6 +396,24 @@ INSTANTIATE_TEST_SUITE_P(Builtin, BuilderOnScene,
                                             ::testing::ValuesIn(builtin_scene_names())),
                          builder_scene_name);
 
+// The exact spatial sweep (BuildOptions::exact_spatial_sweep) in the presets with spatial search:
+// valid trees, answers equal to the arbiter's, the same tree with 1 and 2 threads.
+TEST(ExactSpatialSweep, TreesAreValidAnswerLikeTheArbiterAndAreDeterministic) {
+    for (const char* scene_name : {"soup", "interior"}) {
+        const Scene& scene = builtin(scene_name);
+        const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 300, 1);
+        for (const char* builder : {"kdbvh", "spatial"}) {
+            SCOPED_TRACE(std::string(builder) + " on " + scene_name);
+            BuildOptions options = options_for(builder);
+            options.exact_spatial_sweep = true;
+            const Bvh bvh = build_in_arena(2, scene, options);
+            EXPECT_EQ(tree_violations(scene, bvh, options), "");
+            EXPECT_EQ(first_difference(build_in_arena(1, scene, options), bvh), "") << "1 vs 2 threads";
+            EXPECT_EQ(wrong_against_arbiter(scene, BinaryTracer(scene, bvh), rays), "");
+        }
+    }
+}
+
 namespace {
 
 class PerBuiltinScene : public ::testing::TestWithParam<std::string> {};

@@ -80,6 +80,11 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--lookahead-candidates", lookahead_candidates,
                        "candidates the lookahead compares: the cheapest splits per axis and search space")
         ->capture_default_str();
+    command.add_flag("--spatial-sweep", spatial_sweep,
+                     "kd planes at every reference bound with exact child boxes (the sweep) instead of --spatial-bins bins");
+    command.add_option("--sweep-samples", sweep_samples,
+                       "spatial sweep: positions sampled inside the intervals next to the best event planes (0 = events only)")
+        ->capture_default_str();
 }
 
 uint32_t parse_unsigned(const std::string& text, const char* what) {
@@ -112,6 +117,8 @@ BuildOptions BuildCliOptions::options(const std::string& builder_name) const {
     options.lookahead_depth = lookahead;
     options.lookahead_candidates = lookahead_candidates;
     options.cancel = interrupt_flag();
+    options.exact_spatial_sweep = spatial_sweep;
+    options.sweep_interior_samples = sweep_samples;
     options.validate();
     options.builder = builder_name;
     return options;

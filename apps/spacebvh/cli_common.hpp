@@ -40,6 +40,8 @@ struct BuildCliOptions {
     uint32_t grid_max_cells = 8;
     bool no_grid_splitting = false;
     uint32_t lookahead = 0, lookahead_candidates = 2;
+    bool spatial_sweep = false;
+    uint32_t sweep_samples = 0;
 
     void add_to(CLI::App& command, bool with_builder = true);
     BuildOptions options(const std::string& builder_name) const;

@@ -101,8 +101,10 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "gridmax") spec.options.grid_max_cells = parse_unsigned(value, "gridmax");
             else if (key == "lookahead") spec.options.lookahead_depth = parse_unsigned(value, "lookahead");
             else if (key == "candidates") spec.options.lookahead_candidates = parse_unsigned(value, "candidates");
+            else if (key == "sweep") spec.options.exact_spatial_sweep = parse_unsigned(value, "sweep") != 0;
+            else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates)");
+                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates, sweep, samples)");
         }
         spec.options.validate();
     }
@@ -158,7 +160,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();

@@ -41,14 +41,15 @@ enum class SearchSpace : uint32_t {
     object_sweep = 1u << 0,   // exact SAH sweep over centroid-sorted references, all axes (CBVH)
     object_binned = 1u << 1,  // binned object SAH (Wald 2007)
     spatial_binned = 1u << 2, // kd planes on B bins per axis, straddlers clipped (Stich et al. 2009)
-    // (1u << 3 is reserved for the exact spatial sweep.)
+    spatial_sweep = 1u << 3,  // kd planes at every reference bound event, exact child boxes (Popov et al. 2009)
     grid = 1u << 4,           // child boxes on a G^3 grid over the node, exact counts (Popov et al. 2009)
 };
 constexpr uint32_t operator|(SearchSpace a, SearchSpace b) { return uint32_t(a) | uint32_t(b); }
 constexpr uint32_t operator|(uint32_t a, SearchSpace b) { return a | uint32_t(b); }
 
 // "object,binned,spatial,grid" (names separated by ',' or '+'; any union) -> SearchSpace bits:
-// object = object_sweep, binned = object_binned, spatial = spatial_binned, grid = grid. Throws Error
+// object = object_sweep, binned = object_binned, spatial = spatial_binned, spatial-sweep =
+// spatial_sweep, grid = grid. Throws Error
 // naming an unknown name, or for an empty list.
 uint32_t parse_search_spaces(const std::string& names);
 // The inverse: "object+spatial+grid".
@@ -85,6 +86,13 @@ struct BuildOptions {
     uint32_t lookahead_depth = 0;
     // The candidates it compares: this many of the cheapest splits per axis and search space (1..16).
     uint32_t lookahead_candidates = 2;
+    // Presets with spatial search (kdbvh, spatial, sbvh) evaluate kd planes at every reference bound
+    // event with exact child boxes (SearchSpace::spatial_sweep) instead of on --spatial-bins bins.
+    // Off by default: measured not to pay for its build time (bench/SWEEP_RESULTS.md).
+    bool exact_spatial_sweep = false;
+    // Exact sweep: positions sampled inside the intervals next to the best event planes (0..64;
+    // 0 = event planes only). See src/build/spatial_sweep_split_finder.hpp.
+    uint32_t sweep_interior_samples = 0;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "build/spatial_split.hpp"
 #include "spacebvh/clip.hpp"
 
 namespace spacebvh::build {
@@ -76,10 +77,7 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<
                    const SpatialSearchOptions& options, Sink& sink) {
     const std::span<Reference> references = context.references;
     if (references.size() < 2) return;
-    if (options.gate_alpha > 0.0f && context.best_so_far.is_valid()) {
-        const AABB overlap = intersect(context.best_so_far.left_bounds, context.best_so_far.right_bounds);
-        if (overlap.is_empty() || overlap.area() < options.gate_alpha * context.root_area) return;
-    }
+    if (spatial_search_gated_off(context, options.gate_alpha)) return;
     const AABB& node = context.summary.bounds;
     const uint32_t bins = options.bins;
     for (int axis = 0; axis < 3; ++axis) {
@@ -124,19 +122,9 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<
             // Over this subtree's budget the plane is still a candidate: apply_split then sends the
             // straddlers it cannot duplicate whole to their cheaper side (the budget always holds).
             const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
-            if (split_cost < sink.threshold(axis)) {
-                Split split;
-                split.kind = SplitKind::spatial;
-                split.cost = split_cost;
-                split.axis = axis;
-                split.position = binning.plane(i);
-                split.left_bounds = left;
-                split.right_bounds = suffix_bounds[i];
-                split.left_count = left_count;
-                split.right_count = count_right;
-                split.unsplit = options.unsplit;
-                sink.offer(split);
-            }
+            if (split_cost < sink.threshold(axis))
+                sink.offer(spatial_split(split_cost, axis, binning.plane(i), left, left_count, suffix_bounds[i], count_right,
+                                         options.unsplit));
         }
     }
 }

@@ -8,6 +8,7 @@
 #include "build/object_sweep_split_finder.hpp"
 #include "build/presplit.hpp"
 #include "build/search_spaces.hpp"
+#include "build/spatial_sweep_split_finder.hpp"
 #include "build/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
@@ -56,10 +57,12 @@ constexpr SearchSpaceName kSearchSpaceNames[] = {
     {"object", SearchSpace::object_sweep},
     {"binned", SearchSpace::object_binned},
     {"spatial", SearchSpace::spatial_binned},
+    {"spatial-sweep", SearchSpace::spatial_sweep},
     {"grid", SearchSpace::grid},
 };
 constexpr uint32_t kKnownSearchSpaces = SearchSpace::object_sweep | SearchSpace::object_binned |
-                                        SearchSpace::spatial_binned | uint32_t(SearchSpace::grid);
+                                        SearchSpace::spatial_binned | SearchSpace::spatial_sweep |
+                                        uint32_t(SearchSpace::grid);
 
 const BuilderPreset* find_preset(const std::string& name) {
     for (const BuilderPreset& preset : kPresets)
@@ -68,7 +71,11 @@ const BuilderPreset* find_preset(const std::string& name) {
 }
 
 uint32_t search_spaces_of(const BuilderPreset& preset, const BuildOptions& options) {
-    return options.search_spaces ? options.search_spaces : preset.search_spaces;
+    uint32_t spaces = options.search_spaces ? options.search_spaces : preset.search_spaces;
+    // The exact sweep instead of bins: same planes' rule, every event a candidate (bench/SWEEP_RESULTS.md).
+    if (options.exact_spatial_sweep && (spaces & uint32_t(SearchSpace::spatial_binned)))
+        spaces = (spaces & ~uint32_t(SearchSpace::spatial_binned)) | uint32_t(SearchSpace::spatial_sweep);
+    return spaces;
 }
 
 }  // namespace
@@ -89,6 +96,13 @@ std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t spaces, st
         spatial.gate_alpha = spatial_gate_alpha;
         finders.push_back(std::make_unique<BinnedSpatialSplitFinder>(triangles, spatial));
     }
+    if (spaces & uint32_t(SearchSpace::spatial_sweep)) {
+        SpatialSweepOptions sweep;
+        sweep.unsplit = options.unsplitting && allow_unsplitting;
+        sweep.interior_samples = options.sweep_interior_samples;
+        sweep.gate_alpha = spatial_gate_alpha;
+        finders.push_back(std::make_unique<SpatialSweepSplitFinder>(triangles, sweep));
+    }
     if (spaces & uint32_t(SearchSpace::grid)) {
         GridSearchOptions grid;
         grid.resolution = options.grid_resolution;
@@ -100,7 +114,7 @@ std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t spaces, st
 }
 
 bool splits_references(uint32_t spaces, const BuildOptions& options) {
-    return (spaces & uint32_t(SearchSpace::spatial_binned)) ||
+    return (spaces & (SearchSpace::spatial_binned | SearchSpace::spatial_sweep)) ||
            ((spaces & uint32_t(SearchSpace::grid)) && options.grid_splitting);
 }
 
@@ -114,7 +128,7 @@ uint32_t parse_search_spaces(const std::string& names) {
         const auto known = std::find_if(std::begin(kSearchSpaceNames), std::end(kSearchSpaceNames),
                                         [&](const SearchSpaceName& entry) { return name == entry.name; });
         if (known == std::end(kSearchSpaceNames))
-            throw Error("unknown search space '" + name + "' in '" + names + "' (known: object, binned, spatial, grid)");
+            throw Error("unknown search space '" + name + "' in '" + names + "' (known: object, binned, spatial, spatial-sweep, grid)");
         spaces |= uint32_t(known->space);
         name.clear();
     };
@@ -123,7 +137,7 @@ uint32_t parse_search_spaces(const std::string& names) {
         else if (c != ' ') name += c;
     }
     take();
-    if (spaces == 0) throw Error("empty list of search spaces '" + names + "' (known: object, binned, spatial, grid)");
+    if (spaces == 0) throw Error("empty list of search spaces '" + names + "' (known: object, binned, spatial, spatial-sweep, grid)");
     return spaces;
 }
 
@@ -172,7 +186,7 @@ void BuildOptions::validate() const {
         throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
                     std::to_string(reference_budget));
     if (search_spaces & ~kKnownSearchSpaces)
-        throw Error("search spaces: unknown bits in " + std::to_string(search_spaces) + " (known: object, binned, spatial, grid)");
+        throw Error("search spaces: unknown bits in " + std::to_string(search_spaces) + " (known: object, binned, spatial, spatial-sweep, grid)");
     if (!(grid_resolution > 0.0f && grid_resolution <= 64.0f))
         throw Error("grid resolution R must be in (0, 64], got " + std::to_string(grid_resolution));
     if (grid_max_cells < 2 || grid_max_cells > build::kMaxGridCells)
@@ -181,6 +195,8 @@ void BuildOptions::validate() const {
     if (lookahead_depth > kMaxLookaheadDepth)
         throw Error("lookahead depth must be in [0, " + std::to_string(kMaxLookaheadDepth) + "], got " +
                     std::to_string(lookahead_depth));
+    if (sweep_interior_samples > 64)
+        throw Error("sweep interior samples must be in [0, 64], got " + std::to_string(sweep_interior_samples));
     if (lookahead_candidates < 1 || lookahead_candidates > 16)
         throw Error("lookahead candidates (per axis and search space) must be in [1, 16], got " +
                     std::to_string(lookahead_candidates));

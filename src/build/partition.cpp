@@ -50,14 +50,22 @@ ChildRanges store_children(std::span<Reference> storage, const std::vector<Refer
 //   both sides: SA(L)*|L| + SA(R)*|R|,  left only: SA(L ∪ B)*|L| + SA(R)*(|R|-1),
 //   right only: SA(L)*(|L|-1) + SA(R ∪ B)*|R|   (L, R, counts: the split's estimate).
 enum class Placement { both, left, right };
-Placement cheapest_placement(const Split& split, const AABB& whole) {
+struct PlacementCosts {
+    float both, left_only, right_only;
+};
+PlacementCosts placement_costs(const Split& split, const AABB& whole) {
     const float left_area = split.left_bounds.area(), right_area = split.right_bounds.area();
     const float nl = float(split.left_count), nr = float(split.right_count);
-    const float both = left_area * nl + right_area * nr;
-    const float left_only = merge(split.left_bounds, whole).area() * nl + right_area * (nr - 1.0f);
-    const float right_only = left_area * (nl - 1.0f) + merge(split.right_bounds, whole).area() * nr;
-    if (both <= left_only && both <= right_only) return Placement::both;
-    return left_only <= right_only ? Placement::left : Placement::right;
+    return {left_area * nl + right_area * nr, merge(split.left_bounds, whole).area() * nl + right_area * (nr - 1.0f),
+            left_area * (nl - 1.0f) + merge(split.right_bounds, whole).area() * nr};
+}
+// The cheaper of left only and right only: where the budget allows no duplicate.
+Placement cheaper_side(const PlacementCosts& costs) {
+    return costs.left_only <= costs.right_only ? Placement::left : Placement::right;
+}
+Placement cheapest_placement(const PlacementCosts& costs) {
+    if (costs.both <= costs.left_only && costs.both <= costs.right_only) return Placement::both;
+    return cheaper_side(costs);
 }
 
 ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, const Split& split,
@@ -77,9 +85,9 @@ ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, co
         } else if (lo == hi) {
             left.push_back(reference);  // flat in the plane itself: one side is enough
         } else {
-            Placement placement = split.unsplit ? cheapest_placement(split, reference.bounds) : Placement::both;
-            if (placement == Placement::both && duplicates_left == 0)
-                placement = cheapest_placement(split, reference.bounds) == Placement::right ? Placement::right : Placement::left;
+            const PlacementCosts costs = placement_costs(split, reference.bounds);
+            Placement placement = split.unsplit ? cheapest_placement(costs) : Placement::both;
+            if (placement == Placement::both && duplicates_left == 0) placement = cheaper_side(costs);
             if (placement == Placement::both) {
                 auto [left_piece, right_piece] = split_reference(reference, triangles[reference.primitive], split.axis, split.position);
                 const bool has_left = !left_piece.bounds.is_empty(), has_right = !right_piece.bounds.is_empty();

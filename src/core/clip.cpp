@@ -18,35 +18,15 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
-namespace spacebvh {
-namespace {
+#include "core/clip_polygon.hpp"
 
-struct DPoint {
-    std::array<double, 3> c;
-};
-
-// A convex polygon clipped by at most 6 planes has at most 3 + 6 vertices. Rounding can in theory
-// make a nearly degenerate polygon slightly non-convex, so keep generous headroom and report
-// overflow rather than write out of bounds.
-constexpr int kMaxVertices = 32;
-
-struct Polygon {
-    std::array<DPoint, kMaxVertices> points;
-    int count = 0;
-    bool overflow = false;
-
-    void push(const DPoint& p) {
-        if (count < kMaxVertices) {
-            points[count++] = p;
-        } else {
-            overflow = true;
-        }
-    }
-};
+namespace spacebvh::clipping {
 
 Polygon polygon_of(const Triangle& triangle) {
     Polygon polygon;
@@ -57,35 +37,102 @@ Polygon polygon_of(const Triangle& triangle) {
     return polygon;
 }
 
-// Keeps the part of `in` with x[axis] <= plane (keep_below) or x[axis] >= plane (otherwise).
+namespace {
+
+// The point where edge a -> b crosses x[axis] = plane, given the signed distances of a and b to the
+// plane (opposite signs, both nonzero). Interpolated from a towards b; t is in (0, 1) because the
+// crossing is strict. Negating both distances (the other side's view) gives the same t bit for bit,
+// so both sides of a cut share one crossing point.
+Point crossing(const Point& a, const Point& b, double da, double db, int axis, double plane) {
+    const double t = da / (da - db);
+    Point p;
+    for (int k = 0; k < 3; ++k) {
+        if (k == axis) {
+            p.c[k] = plane;  // exactly on the plane: never outside through rounding
+        } else {
+            const double value = a.c[k] + t * (b.c[k] - a.c[k]);
+            p.c[k] = std::clamp(value, std::min(a.c[k], b.c[k]), std::max(a.c[k], b.c[k]));
+        }
+    }
+    return p;
+}
+
+bool crosses_strictly(double da, double db) { return (da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0); }
+
+// The neighbouring floats below and above (std::nextafter without the library call; finite or
+// infinite input, never NaN).
+float next_down(float f) {
+    if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+    const uint32_t bits = std::bit_cast<uint32_t>(f);
+    return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
+}
+float next_up(float f) {
+    if (f == 0.0f) return std::numeric_limits<float>::denorm_min();
+    const uint32_t bits = std::bit_cast<uint32_t>(f);
+    return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
+}
+
+// Written as selects, not branches: about half the points need the step, unpredictably.
+float round_down(double value) {
+    const float f = float(value);
+    const float below = next_down(f);
+    return double(f) > value ? below : f;
+}
+
+float round_up(double value) {
+    const float f = float(value);
+    const float above = next_up(f);
+    return double(f) < value ? above : f;
+}
+
+// The float box of one point, rounded outward. Rounding is monotone, so the union of these boxes is
+// the outward rounding of the polygon's double bounds.
+AABB rounded_box(const Point& p) {
+    AABB box;
+    for (int k = 0; k < 3; ++k) {
+        box.lo[k] = round_down(p.c[k]);
+        box.hi[k] = round_up(p.c[k]);
+    }
+    return box;
+}
+
+// Clamps accumulated float bounds into `limit` (non-empty); empty stays empty. Clamping (rather than
+// intersecting) keeps a non-empty polygon non-empty when piece_within had to use a widened box.
+AABB clamped_into(const AABB& bounds, const AABB& limit) {
+    if (bounds.is_empty()) return AABB::empty();
+    AABB result;
+    for (int k = 0; k < 3; ++k) {
+        result.lo[k] = std::clamp(bounds.lo[k], limit.lo[k], limit.hi[k]);
+        result.hi[k] = std::clamp(bounds.hi[k], limit.lo[k], limit.hi[k]);
+    }
+    return result;
+}
+
+}  // namespace
+
 void clip_half_space(const Polygon& in, Polygon& out, int axis, double plane, bool keep_below) {
     out.count = 0;
     out.overflow = in.overflow;
     if (in.count == 0) return;
     // Signed distance, positive inside.
-    auto inside_distance = [&](const DPoint& p) { return keep_below ? plane - p.c[axis] : p.c[axis] - plane; };
+    auto inside_distance = [&](const Point& p) { return keep_below ? plane - p.c[axis] : p.c[axis] - plane; };
     for (int i = 0; i < in.count; ++i) {
-        const DPoint& a = in.points[i];
-        const DPoint& b = in.points[(i + 1) % in.count];
-        double da = inside_distance(a);
-        double db = inside_distance(b);
+        const Point& a = in.points[i];
+        const Point& b = in.points[(i + 1) % in.count];
+        const double da = inside_distance(a);
+        const double db = inside_distance(b);
         if (da >= 0.0) out.push(a);
-        if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) {
-            // Interpolate from a towards b; t is in (0, 1) because the crossing is strict.
-            double t = da / (da - db);
-            DPoint p;
-            for (int k = 0; k < 3; ++k) {
-                if (k == axis) {
-                    p.c[k] = plane;  // exactly on the plane: never outside through rounding
-                } else {
-                    double value = a.c[k] + t * (b.c[k] - a.c[k]);
-                    p.c[k] = std::clamp(value, std::min(a.c[k], b.c[k]), std::max(a.c[k], b.c[k]));
-                }
-            }
-            out.push(p);
-        }
+        if (crosses_strictly(da, db)) out.push(crossing(a, b, da, db, axis, plane));
     }
 }
+
+AABB bounds_of(const Polygon& polygon, const AABB& limit) {
+    AABB bounds;
+    for (int i = 0; i < polygon.count; ++i) bounds.extend(rounded_box(polygon.points[i]));
+    return clamped_into(bounds, limit);
+}
+
+namespace {
 
 // Clips `polygon` in place to the box [lo, hi] (double planes), only against the planes that the
 // polygon's bounds `extent` actually cross (the others cannot remove anything).
@@ -117,72 +164,7 @@ void clip_to_box(Polygon& polygon, const AABB& extent, const AABB& box) {
                 {double(box.hi.x), double(box.hi.y), double(box.hi.z)});
 }
 
-float round_down(double value) {
-    float f = float(value);
-    if (double(f) > value) f = std::nextafter(f, -kInfinity);
-    return f;
-}
-
-float round_up(double value) {
-    float f = float(value);
-    if (double(f) < value) f = std::nextafter(f, kInfinity);
-    return f;
-}
-
-// Float bounds of the polygon, rounded outward, then clamped into `limit` (non-empty). Points are
-// normally inside `limit` already, so this is an intersection; clamping (rather than intersecting)
-// keeps a non-empty polygon non-empty when split_triangle_bounds had to use a widened box.
-AABB bounds_of(const Polygon& polygon, const AABB& limit) {
-    if (polygon.count == 0) return AABB::empty();
-    std::array<double, 3> lo = polygon.points[0].c, hi = polygon.points[0].c;
-    for (int i = 1; i < polygon.count; ++i) {
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], polygon.points[i].c[k]);
-            hi[k] = std::max(hi[k], polygon.points[i].c[k]);
-        }
-    }
-    AABB result;
-    for (int k = 0; k < 3; ++k) {
-        result.lo[k] = std::clamp(round_down(lo[k]), limit.lo[k], limit.hi[k]);
-        result.hi[k] = std::clamp(round_up(hi[k]), limit.lo[k], limit.hi[k]);
-    }
-    return result;
-}
-
-// Area of a planar polygon: half the length of its vector area (sum of fan cross products).
-double polygon_area(const Polygon& polygon) {
-    if (polygon.count < 3) return 0.0;
-    const auto& o = polygon.points[0].c;
-    double sx = 0.0, sy = 0.0, sz = 0.0;
-    for (int i = 1; i + 1 < polygon.count; ++i) {
-        const auto& p = polygon.points[i].c;
-        const auto& q = polygon.points[i + 1].c;
-        double ax = p[0] - o[0], ay = p[1] - o[1], az = p[2] - o[2];
-        double bx = q[0] - o[0], by = q[1] - o[1], bz = q[2] - o[2];
-        sx += ay * bz - az * by;
-        sy += az * bx - ax * bz;
-        sz += ax * by - ay * bx;
-    }
-    return 0.5 * std::sqrt(sx * sx + sy * sy + sz * sz);
-}
-
 bool boxes_overlap(const AABB& a, const AABB& b) { return !intersect(a, b).is_empty(); }
-
-}  // namespace
-
-AABB clip_triangle_bounds(const Triangle& triangle, const AABB& box) {
-    AABB triangle_box = triangle.bounds();
-    if (box.is_empty() || !boxes_overlap(triangle_box, box)) return AABB::empty();
-    if (box.contains(triangle_box)) return triangle_box;
-    Polygon polygon = polygon_of(triangle);
-    clip_to_box(polygon, triangle_box, box);
-    AABB limit = intersect(triangle_box, box);
-    // Unreachable in practice; stay conservative rather than lose part of the triangle.
-    if (polygon.overflow) return limit;
-    return bounds_of(polygon, limit);
-}
-
-namespace {
 
 // The part of the triangle inside `current_bounds` (a reference's bounds) as a polygon; false when
 // there is none.
@@ -213,64 +195,255 @@ bool piece_within(const Triangle& triangle, const AABB& triangle_box, const AABB
 
 }  // namespace
 
-SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis, float position) {
-    SplitBounds result{AABB::empty(), AABB::empty()};
-    AABB triangle_box = triangle.bounds();
-    if (current_bounds.is_empty() || !boxes_overlap(triangle_box, current_bounds)) return result;
-
-    AABB limit = intersect(triangle_box, current_bounds);
-    if (limit.is_empty()) return result;
-
-    Polygon piece;
-    if (!piece_within(triangle, triangle_box, current_bounds, piece)) return result;
-    AABB left_limit = limit, right_limit = limit;
-    left_limit.hi[axis] = std::min(left_limit.hi[axis], position);
-    right_limit.lo[axis] = std::max(right_limit.lo[axis], position);
-
-    Polygon side;
-    clip_half_space(piece, side, axis, double(position), true);
-    if (!left_limit.is_empty()) result.left = side.overflow ? left_limit : bounds_of(side, left_limit);
-    clip_half_space(piece, side, axis, double(position), false);
-    if (!right_limit.is_empty()) result.right = side.overflow ? right_limit : bounds_of(side, right_limit);
-    return result;
-}
-
-void chop_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis,
-                          std::span<const float> planes, std::span<AABB> pieces) {
-    std::fill(pieces.begin(), pieces.end(), AABB::empty());
+TrianglePiece::TrianglePiece(const Triangle& triangle, const AABB& current_bounds) {
     const AABB triangle_box = triangle.bounds();
     if (current_bounds.is_empty() || !boxes_overlap(triangle_box, current_bounds)) return;
     const AABB limit = intersect(triangle_box, current_bounds);
     if (limit.is_empty()) return;
-    // Clip once to the reference's bounds, then peel one slab off per plane: the same operations
-    // as split_triangle_bounds applied plane by plane, without re-clipping the triangle each time.
-    Polygon buffers[3];
-    Polygon* rest = &buffers[0];
-    Polygon* next = &buffers[1];
-    Polygon& slab = buffers[2];
-    if (!piece_within(triangle, triangle_box, current_bounds, *rest)) return;
-    float low = -kInfinity;
-    for (size_t i = 0; i < planes.size(); ++i) {
-        AABB slab_limit = limit;
-        slab_limit.lo[axis] = std::max(slab_limit.lo[axis], low);
-        slab_limit.hi[axis] = std::min(slab_limit.hi[axis], planes[i]);
-        clip_half_space(*rest, slab, axis, double(planes[i]), true);
-        if (!slab_limit.is_empty() && slab.count > 0) pieces[i] = slab.overflow ? slab_limit : bounds_of(slab, slab_limit);
-        clip_half_space(*rest, *next, axis, double(planes[i]), false);
-        std::swap(rest, next);
-        low = planes[i];
-        if (rest->count == 0) return;
+    if (!piece_within(triangle, triangle_box, current_bounds, polygon_)) return;
+    limit_ = limit;
+}
+
+// One pass instead of two half-space clips: the part below the plane is the vertices with
+// x <= plane plus the strict crossings of the edges, the part above likewise (Sutherland-Hodgman
+// keeps exactly these points), so both boxes come out as clip_half_space + bounds_of would give.
+SplitBounds TrianglePiece::split(int axis, float position) const {
+    SplitBounds result{AABB::empty(), AABB::empty()};
+    if (empty()) return result;
+    AABB left_limit = limit_, right_limit = limit_;
+    left_limit.hi[axis] = std::min(left_limit.hi[axis], position);
+    right_limit.lo[axis] = std::max(right_limit.lo[axis], position);
+    const double plane = position;
+    AABB below, above;
+    for (int i = 0; i < polygon_.count; ++i) {
+        const Point& a = polygon_.points[i];
+        const Point& b = polygon_.points[(i + 1) % polygon_.count];
+        const double da = a.c[axis] - plane, db = b.c[axis] - plane;
+        const AABB vertex = rounded_box(a);
+        if (da <= 0.0) below.extend(vertex);
+        if (da >= 0.0) above.extend(vertex);
+        if (crosses_strictly(da, db)) {
+            const AABB cut = rounded_box(crossing(a, b, da, db, axis, plane));
+            below.extend(cut);
+            above.extend(cut);
+        }
     }
-    AABB last_limit = limit;
-    last_limit.lo[axis] = std::max(last_limit.lo[axis], low);
-    if (!last_limit.is_empty()) pieces[planes.size()] = rest->overflow ? last_limit : bounds_of(*rest, last_limit);
+    if (!left_limit.is_empty()) result.left = polygon_.overflow && !below.is_empty() ? left_limit : clamped_into(below, left_limit);
+    if (!right_limit.is_empty())
+        result.right = polygon_.overflow && !above.is_empty() ? right_limit : clamped_into(above, right_limit);
+    return result;
+}
+
+// Exactness of the skipping: the side's box is clamp(round(min of its points)) per bound, rounding and
+// clamping are monotone, so a point at or inside box.lo[k] cannot lower box.lo[k] unless the clamp
+// itself lies below box.lo[k] (the side's limit entirely below the box on k); on such bounds every
+// point is taken.
+void TrianglePiece::extend_side(AABB& box, int axis, float position, bool below) const {
+    if (empty()) return;
+    AABB limit = limit_;
+    if (below) {
+        limit.hi[axis] = std::min(limit.hi[axis], position);
+    } else {
+        limit.lo[axis] = std::max(limit.lo[axis], position);
+    }
+    if (limit.is_empty()) return;
+    if (polygon_.overflow) {
+        const SplitBounds pieces = split(axis, position);
+        box.extend(below ? pieces.left : pieces.right);
+        return;
+    }
+    constexpr double kHuge = std::numeric_limits<double>::infinity();
+    std::array<double, 3> needed_lo, needed_hi, lo, hi;  // a coordinate matters below needed_lo / above needed_hi
+    for (int k = 0; k < 3; ++k) {
+        needed_lo[k] = limit.hi[k] >= box.lo[k] ? double(box.lo[k]) : kHuge;
+        needed_hi[k] = limit.lo[k] <= box.hi[k] ? double(box.hi[k]) : -kHuge;
+        lo[k] = kHuge;
+        hi[k] = -kHuge;
+    }
+    auto matters = [&](const Point& p) {
+        for (int k = 0; k < 3; ++k)
+            if (p.c[k] < needed_lo[k] || p.c[k] > needed_hi[k]) return true;
+        return false;
+    };
+    auto take = [&](const Point& p) {
+        for (int k = 0; k < 3; ++k) {
+            if (p.c[k] < needed_lo[k]) lo[k] = std::min(lo[k], p.c[k]);
+            if (p.c[k] > needed_hi[k]) hi[k] = std::max(hi[k], p.c[k]);
+        }
+    };
+    const double plane = position;
+    for (int i = 0; i < polygon_.count; ++i) {
+        const Point& a = polygon_.points[i];
+        const Point& b = polygon_.points[(i + 1) % polygon_.count];
+        const double da = a.c[axis] - plane, db = b.c[axis] - plane;
+        if (below ? da <= 0.0 : da >= 0.0) take(a);
+        // The crossing lies between a and b on every coordinate (clamped), so it matters only if one does.
+        if (crosses_strictly(da, db) && (matters(a) || matters(b))) take(crossing(a, b, da, db, axis, plane));
+    }
+    for (int k = 0; k < 3; ++k) {
+        if (lo[k] != kHuge) box.lo[k] = std::min(box.lo[k], std::clamp(round_down(lo[k]), limit.lo[k], limit.hi[k]));
+        if (hi[k] != -kHuge) box.hi[k] = std::max(box.hi[k], std::clamp(round_up(hi[k]), limit.lo[k], limit.hi[k]));
+    }
+}
+
+float TrianglePiece::quiet_until(const AABB& box, int axis, float position, bool below) const {
+    const double sign = below ? 1.0 : -1.0;
+    const float now = float(sign) * position;
+    if (empty()) return kInfinity;
+    if (polygon_.overflow) return now;
+    // Clamping into the limit could move a point that is inside the box out of it.
+    for (int k = 0; k < 3; ++k)
+        if (k != axis && (limit_.lo[k] > box.hi[k] || limit_.hi[k] < box.lo[k])) return now;
+    const double swept = sign * double(position);
+    double quiet = std::numeric_limits<double>::infinity();
+    constexpr double kMargin = 1e-12;  // relative; the crossing arithmetic errs by ~1e-16
+    for (int i = 0; i < polygon_.count; ++i) {
+        const Point& a = polygon_.points[i];
+        const Point& b = polygon_.points[(i + 1) % polygon_.count];
+        const double ua = sign * a.c[axis], ub = sign * b.c[axis];
+        if (ua <= swept && ub <= swept) continue;  // already inside the box
+        for (int k = 0; k < 3; ++k) {
+            if (k == axis) continue;
+            for (const bool upper : {false, true}) {
+                const double bound = upper ? double(box.hi[k]) : double(box.lo[k]);
+                auto outside = [&](const Point& p) { return upper ? p.c[k] > bound : p.c[k] < bound; };
+                const bool out_a = outside(a), out_b = outside(b);
+                if (!out_a && !out_b) continue;
+                if (ua > swept && ub > swept) {
+                    quiet = std::min(quiet, std::min(ua, ub));  // the whole edge is ahead: stop at its start
+                    continue;
+                }
+                // One end is behind the plane (inside the box, or give up) and the other ahead, outside.
+                const Point& in = ua <= swept ? a : b;
+                const Point& out = ua <= swept ? b : a;
+                if (outside(in)) return now;
+                const double u_in = sign * in.c[axis], u_out = sign * out.c[axis];
+                const double delta = out.c[k] - in.c[k];
+                const double t_exit = (bound - in.c[k]) / delta;
+                const double margin = kMargin * (1.0 + (std::abs(in.c[k]) + std::abs(out.c[k])) / std::abs(delta) +
+                                                 (std::abs(u_in) + std::abs(u_out)) / (u_out - u_in));
+                const double t = t_exit - margin;
+                if (!(t > 0.0)) return now;
+                quiet = std::min(quiet, u_in + t * (u_out - u_in));
+            }
+        }
+    }
+    if (quiet == std::numeric_limits<double>::infinity()) return kInfinity;
+    return std::max(now, round_down(quiet));
+}
+
+// Sutherland-Hodgman peeling slab after slab (clip the rest above each plane, the slab below it)
+// keeps, for slab j, the vertices with planes[j-1] <= x <= planes[j] and the points where edges
+// cross those planes; an edge already cut at an earlier plane is cut again from its cut point. This
+// replays exactly that arithmetic per edge (one chain of cut points walking along the edge), without
+// building the intermediate polygons: the same bits, a fraction of the work.
+void TrianglePiece::chop(int axis, std::span<const float> planes, std::span<AABB> pieces) const {
+    std::fill(pieces.begin(), pieces.end(), AABB::empty());
+    if (empty()) return;
+    const size_t plane_count = planes.size();
+    // A point on x[axis] = x belongs to every slab whose closed range contains x: slabs first..last.
+    auto add = [&](const Point& p, size_t first, size_t last) {
+        const AABB box = rounded_box(p);
+        for (size_t j = first; j <= last; ++j) pieces[j].extend(box);
+    };
+    // The slab after the run of planes equal to planes[k] (a cut on plane k lies in slabs k..that).
+    auto end_of_run = [&](size_t k) {
+        size_t last = k + 1;
+        while (last < plane_count && planes[last] == planes[k]) ++last;
+        return last;
+    };
+    for (int i = 0; i < polygon_.count; ++i) {
+        const Point& a = polygon_.points[i];
+        const Point& b = polygon_.points[(i + 1) % polygon_.count];
+        const double xa = a.c[axis], xb = b.c[axis];
+        const size_t first = size_t(std::lower_bound(planes.begin(), planes.end(), xa,
+                                                     [](float plane, double value) { return double(plane) < value; }) -
+                                    planes.begin());
+        size_t after = first;  // first plane above xa
+        while (after < plane_count && double(planes[after]) <= xa) ++after;
+        add(a, first, after);
+        if (xa == xb) continue;
+        // Planes strictly between the ends, ascending; each cut moves the end below the plane up.
+        size_t k = xa < xb ? after : size_t(std::upper_bound(planes.begin(), planes.end(), xb,
+                                                            [](double value, float plane) { return value < double(plane); }) -
+                                           planes.begin());
+        Point low = xa < xb ? a : b;  // the current cut point on the low side
+        const double high = std::max(xa, xb);
+        while (k < plane_count && double(planes[k]) < high) {
+            const double position = planes[k];
+            // The rest polygon holds the edge in its original direction: a -> (cut b) or (cut a) -> b.
+            const Point& from = xa < xb ? low : a;
+            const Point& to = xa < xb ? b : low;
+            low = crossing(from, to, from.c[axis] - position, to.c[axis] - position, axis, position);
+            const size_t last = end_of_run(k);
+            add(low, k, last);
+            k = last;  // repeated planes: the cut point lies on them, no strict crossing
+        }
+    }
+    for (size_t j = 0; j <= plane_count; ++j) {
+        AABB slab_limit = limit_;
+        if (j > 0) slab_limit.lo[axis] = std::max(slab_limit.lo[axis], planes[j - 1]);
+        if (j < plane_count) slab_limit.hi[axis] = std::min(slab_limit.hi[axis], planes[j]);
+        if (slab_limit.is_empty() || pieces[j].is_empty()) {
+            pieces[j] = AABB::empty();
+        } else {
+            pieces[j] = polygon_.overflow ? slab_limit : clamped_into(pieces[j], slab_limit);
+        }
+    }
+}
+
+}  // namespace spacebvh::clipping
+
+namespace spacebvh {
+namespace {
+
+using clipping::Polygon;
+
+// Area of a planar polygon: half the length of its vector area (sum of fan cross products).
+double polygon_area(const Polygon& polygon) {
+    if (polygon.count < 3) return 0.0;
+    const auto& o = polygon.points[0].c;
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    for (int i = 1; i + 1 < polygon.count; ++i) {
+        const auto& p = polygon.points[i].c;
+        const auto& q = polygon.points[i + 1].c;
+        double ax = p[0] - o[0], ay = p[1] - o[1], az = p[2] - o[2];
+        double bx = q[0] - o[0], by = q[1] - o[1], bz = q[2] - o[2];
+        sx += ay * bz - az * by;
+        sy += az * bx - ax * bz;
+        sz += ax * by - ay * bx;
+    }
+    return 0.5 * std::sqrt(sx * sx + sy * sy + sz * sz);
+}
+
+}  // namespace
+
+AABB clip_triangle_bounds(const Triangle& triangle, const AABB& box) {
+    AABB triangle_box = triangle.bounds();
+    if (box.is_empty() || !clipping::boxes_overlap(triangle_box, box)) return AABB::empty();
+    if (box.contains(triangle_box)) return triangle_box;
+    Polygon polygon = clipping::polygon_of(triangle);
+    clipping::clip_to_box(polygon, triangle_box, box);
+    AABB limit = intersect(triangle_box, box);
+    // Unreachable in practice; stay conservative rather than lose part of the triangle.
+    if (polygon.overflow) return limit;
+    return clipping::bounds_of(polygon, limit);
+}
+
+SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis, float position) {
+    return clipping::TrianglePiece(triangle, current_bounds).split(axis, position);
+}
+
+void chop_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis,
+                          std::span<const float> planes, std::span<AABB> pieces) {
+    clipping::TrianglePiece(triangle, current_bounds).chop(axis, planes, pieces);
 }
 
 double clipped_triangle_area(const Triangle& triangle, const AABB& box) {
     AABB triangle_box = triangle.bounds();
-    if (box.is_empty() || !boxes_overlap(triangle_box, box)) return 0.0;
-    Polygon polygon = polygon_of(triangle);
-    if (!box.contains(triangle_box)) clip_to_box(polygon, triangle_box, box);
+    if (box.is_empty() || !clipping::boxes_overlap(triangle_box, box)) return 0.0;
+    Polygon polygon = clipping::polygon_of(triangle);
+    if (!box.contains(triangle_box)) clipping::clip_to_box(polygon, triangle_box, box);
     return polygon_area(polygon);
 }
 
