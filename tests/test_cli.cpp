@@ -352,7 +352,7 @@ TEST_F(Cli, LookaheadInBuildAndCompare) {
     ASSERT_EQ(build.exit_code, 0) << build.output;
     EXPECT_EQ(read_json("l.json")["lookahead_depth"], 1);
     EXPECT_NE(build.output.find("lookahead 1"), std::string::npos) << build.output;
-    const CliResult r = run("compare builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium "
+    const CliResult r = run("compare builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium --embree-packets none "
                             "--random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo --json c.json");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];

@@ -8,7 +8,7 @@ namespace spacebvh::cli {
 
 void add_render_command(CLI::App& app) {
     struct Options {
-        std::string source, output;
+        std::string source, output, kernel = "auto";
         bool heatmap = false;
         std::string quantity = "work";
         double scale_max = 0.0;
@@ -27,6 +27,8 @@ void add_render_command(CLI::App& app) {
     command->add_option("--scale-max", options->scale_max,
                         "fixed top of the heat map's colour scale (default: the 99th percentile of this picture)");
     options->scene.add_to(*command);
+    command->add_option("--kernel", options->kernel, kernel_help() + "; heat maps count that kernel's work")
+        ->capture_default_str();
     options->build.add_to(*command);
     options->camera.add_to(*command);
     options->common.add_to(*command);
@@ -37,7 +39,8 @@ void add_render_command(CLI::App& app) {
         const Camera camera = options->camera.camera_for(scene, options->source, transform);
         const BuildOptions build_options = options->build.options(options->build.builder);
         const Bvh bvh = build_tree(scene, build_options);
-        const BinaryTracer tracer(scene, bvh);
+        const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
+        const Tracer& tracer = *tracer_pointer;
         const uint32_t width = options->camera.width, height = options->camera.height;
         if (!options->heatmap) {
             write_png(options->output, render_shaded(scene, tracer, camera, width, height));
