@@ -524,7 +524,6 @@ TEST(Tracer, SegmentEndsAtTheHitDistanceMatchTheArbiter) {
         scene.triangles.push_back({corner(), corner(), corner()});
     }
     const Bvh tree = build_with(scene, "binned", 2);
-    const BinaryTracer tracer(scene, tree);
     std::vector<Ray> rays;
     for (const Ray& ray : generate_random_rays(scene.bounds(), 3000, 5)) {
         const HitRecord truth = arbiter_closest_hit(scene, ray);
@@ -777,9 +776,7 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
     // The builder's single-leaf tree of one triangle too.
     Scene one;
     one.triangles = {scene.triangles[0]};
-    const Bvh one_tracer_tree = build_with(one, "binned");
-    const BinaryTracer one_tracer(one, one_tracer_tree);
-    EXPECT_EQ(disagreements_with_arbiter(one, one_tracer_tree, rays), "");
+    EXPECT_EQ(disagreements_with_arbiter(one, build_with(one, "binned"), rays), "");
 }
 
 // A hand-made tree 1,000 levels deep (the builders' depth limit is 1,024) whose every level has two
