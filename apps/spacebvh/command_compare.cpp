@@ -127,13 +127,19 @@ std::string kernel_for(const std::string& kernel, RayKind kind) {
     return kind == RayKind::primary ? "packet8" : "bvh8";
 }
 
-// Primary rays reordered so that each tile x tile block of pixels is consecutive (what packets of
-// tile^2 rays need); tile 0 keeps the spec's row-major order.
-std::vector<Ray> in_tile_order(const std::vector<Ray>& rays, uint32_t width, uint32_t height, uint32_t tile) {
-    if (tile == 0) return rays;
+// The order in which to trace an image's primary rays: each tile x tile block of pixels consecutive
+// (what packets of tile^2 rays need); tile 0 keeps the spec's row-major order.
+std::vector<uint32_t> pixel_order(uint32_t width, uint32_t height, uint32_t tile) {
+    if (tile > 0) return tile_order(width, height, tile);
+    std::vector<uint32_t> identity(size_t(width) * height);
+    for (size_t i = 0; i < identity.size(); ++i) identity[i] = uint32_t(i);
+    return identity;
+}
+
+std::vector<Ray> gathered(const std::vector<Ray>& rays, const std::vector<uint32_t>& order) {
     std::vector<Ray> ordered;
-    ordered.reserve(rays.size());
-    for (uint32_t i : tile_order(width, height, tile)) ordered.push_back(rays[i]);
+    ordered.reserve(order.size());
+    for (uint32_t i : order) ordered.push_back(rays[i]);
     return ordered;
 }
 
@@ -232,6 +238,7 @@ void add_compare_command(CLI::App& app) {
             std::vector<Row> rows;
             std::vector<Ray> ray_sets[3];
             std::vector<Ray> primary_row_major;
+            const std::vector<uint32_t> primary_order = pixel_order(parameters.width, parameters.height, options->tile);
             Progress progress("compare " + scene.name, options->common);
             const size_t our_rows = builders.size() * kernels.size();
             const size_t row_total = our_rows + embree_rows.size() + embree_packet_rows.size();
@@ -251,8 +258,7 @@ void add_compare_command(CLI::App& app) {
                     const BinaryTracer tracer(scene, bvh);
                     for (RayKind kind : kKinds) ray_sets[int(kind)] = make_ray_set(kind, scene, tracer, parameters);
                     primary_row_major = ray_sets[int(RayKind::primary)];
-                    ray_sets[int(RayKind::primary)] =
-                        in_tile_order(primary_row_major, parameters.width, parameters.height, options->tile);
+                    ray_sets[int(RayKind::primary)] = gathered(primary_row_major, primary_order);
                 }
                 for (size_t k = 0; k < kernels.size(); ++k) {
                     Row row;
@@ -289,10 +295,8 @@ void add_compare_command(CLI::App& app) {
             // (rtcIntersect16/rtcOccluded16), their primary rays in 4x4 tiles, answers put back in our order.
             const std::vector<uint32_t> tiles_of_16 =
                 options->tile == 0 ? std::vector<uint32_t>{} : tile_order(parameters.width, parameters.height, 4);
-            std::vector<uint32_t> common_position(primary_row_major.size());
-            const std::vector<uint32_t> common_order = options->tile == 0 ? std::vector<uint32_t>{}
-                                                                           : tile_order(parameters.width, parameters.height, options->tile);
-            for (size_t i = 0; i < common_position.size(); ++i) common_position[common_order.empty() ? i : common_order[i]] = uint32_t(i);
+            std::vector<uint32_t> position_in_primary(primary_order.size());  // row-major pixel -> our ray index
+            for (size_t i = 0; i < primary_order.size(); ++i) position_in_primary[primary_order[i]] = uint32_t(i);
             for (size_t e = 0; e < embree_rows.size() + embree_packet_rows.size(); ++e) {
                 const bool packets = e >= embree_rows.size();
                 const EmbreeQuality quality = packets ? embree_packet_rows[e - embree_rows.size()] : embree_rows[e];
@@ -317,14 +321,13 @@ void add_compare_command(CLI::App& app) {
                         trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
                                    [&](auto r, auto o) { embree->occluded16(r, o); }, ray_sets[int(kind)], options->runs, result);
                     } else {
-                        std::vector<Ray> tiled;
-                        for (uint32_t i : tiles_of_16) tiled.push_back(primary_row_major[i]);
                         trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
-                                   [&](auto r, auto o) { embree->occluded16(r, o); }, tiled, options->runs, result);
+                                   [&](auto r, auto o) { embree->occluded16(r, o); }, gathered(primary_row_major, tiles_of_16),
+                                   options->runs, result);
                         KindResult ours_order = result;
                         for (size_t i = 0; i < tiles_of_16.size(); ++i) {
-                            ours_order.closest[common_position[tiles_of_16[i]]] = result.closest[i];
-                            ours_order.occlusion[common_position[tiles_of_16[i]]] = result.occlusion[i];
+                            ours_order.closest[position_in_primary[tiles_of_16[i]]] = result.closest[i];
+                            ours_order.occlusion[position_in_primary[tiles_of_16[i]]] = result.occlusion[i];
                         }
                         result = std::move(ours_order);
                     }
