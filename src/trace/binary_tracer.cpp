@@ -5,6 +5,7 @@
 #include "spacebvh/tracer.hpp"
 #include "trace/huge_page_allocator.hpp"
 #include "trace/traversal_common.hpp"
+#include "trace/triangle_pack.hpp"
 #include "trace/watertight_triangle.hpp"
 
 namespace spacebvh {
@@ -13,20 +14,16 @@ namespace spacebvh {
 // per axis [lo of child 0, lo of child 1, hi of child 0, hi of child 1].
 struct alignas(64) CompactNode {
     float planes[3][4];
-    // Inner child: index of its CompactNode, count = 0. Leaf child: first LeafTriangle, count > 0.
+    // Inner child: index of its CompactNode, count = 0. Leaf child: its first TrianglePack, holding
+    // count > 0 triangles.
     uint32_t child[2];
     uint32_t count[2];
 };
 static_assert(sizeof(CompactNode) == 64);
 
-struct LeafTriangle {
-    Vec3 v0, v1, v2;
-    uint32_t primitive;
-};
-
 struct BinaryTracer::Layout {
     std::vector<CompactNode, trace::HugePageAllocator<CompactNode>> nodes;
-    std::vector<LeafTriangle, trace::HugePageAllocator<LeafTriangle>> triangles;
+    trace::TrianglePacks packs;
 };
 
 namespace {
@@ -78,78 +75,68 @@ inline int intersect_children(const CompactNode& node, const SlabRay& slab, floa
     return mask;
 }
 
+// Closest hit (kAnyHit = false) or any hit. Leaf children are tested as soon as the ray enters them;
+// of two inner children the nearer is visited first. Stack entries keep their entry distance, so a
+// subtree entered beyond the closest hit found since it was pushed is skipped without fetching it.
 template <bool kAnyHit, bool kStats>
 bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     const SlabRay slab(ray);
     const trace::WatertightRay shear(ray);
+    const trace::PackRay pack_ray(shear);
     float tmax = ray.tmax;
     bool found = false;
 
     struct Entry {
-        uint32_t child, count;
+        uint32_t node;
+        float entry;
     };
     Entry stack[kStackSize];
     int top = 0;
     uint32_t node_index = 0;
-
-    auto test_leaf = [&](uint32_t first, uint32_t count) {
-        for (uint32_t i = first; i < first + count; ++i) {
-            const LeafTriangle& tri = layout.triangles[i];
-            if constexpr (kStats) stats->triangles_tested++;
-            trace::TriangleHit candidate;
-            if (trace::intersect_watertight(ray, shear, tri.v0, tri.v1, tri.v2, tmax, candidate)) {
-                found = true;
-                if constexpr (kAnyHit) return true;
-                tmax = candidate.t;
-                hit.t = candidate.t;
-                hit.u = candidate.u;
-                hit.v = candidate.v;
-                hit.primitive = tri.primitive;
-            }
-        }
-        return false;
-    };
 
     while (true) {
         const CompactNode& node = layout.nodes[node_index];
         // The walk is bound by memory latency: start fetching both children (node or leaf triangles)
         // now, so the fetch overlaps this node's box tests.
         for (int slot = 0; slot < 2; ++slot) {
-            const char* next = node.count[slot] ? reinterpret_cast<const char*>(&layout.triangles[node.child[slot]])
-                                                : reinterpret_cast<const char*>(&layout.nodes[node.child[slot]]);
-            _mm_prefetch(next, _MM_HINT_T0);
+            if (node.count[slot])
+                trace::prefetch_pack(layout.packs[node.child[slot]]);
+            else
+                _mm_prefetch(reinterpret_cast<const char*>(&layout.nodes[node.child[slot]]), _MM_HINT_T0);
         }
         if constexpr (kStats) stats->nodes_visited += 2;
         float entry[2];
         const int mask = intersect_children(node, slab, ray.tmin, tmax, entry);
 
-        // Leaves are tested at once; inner children are queued, nearer first.
         Entry inner[2];
-        float inner_entry[2];
         int inner_count = 0;
         for (int slot = 0; slot < 2; ++slot) {
             if (!(mask & (1 << slot))) continue;
             if (node.count[slot] > 0) {
-                if (test_leaf(node.child[slot], node.count[slot])) return true;
+                if (trace::test_leaf_packs<false, kAnyHit, kStats>(layout.packs.data(), node.child[slot], node.count[slot], ray,
+                                                                  shear, pack_ray, tmax, hit, found, stats))
+                    return true;
             } else {
-                inner[inner_count] = {node.child[slot], 0};
-                inner_entry[inner_count++] = entry[slot];
+                inner[inner_count++] = {node.child[slot], entry[slot]};
             }
         }
         if (inner_count == 2) {
-            const int near = inner_entry[1] < inner_entry[0] ? 1 : 0;
+            const int near = inner[1].entry < inner[0].entry ? 1 : 0;
             stack[top++] = inner[1 - near];
-            node_index = inner[near].child;
+            node_index = inner[near].node;
             continue;
         }
-        if (inner_count == 1) {
-            node_index = inner[0].child;
+        if (inner_count == 1 && inner[0].entry <= tmax) {
+            node_index = inner[0].node;
             continue;
         }
-        if (top == 0) break;
-        node_index = stack[--top].child;
+        // Pop the nearest pending subtree that may still hold a closer hit.
+        do {
+            if (top == 0) return found;
+            --top;
+        } while (!kAnyHit && stack[top].entry > tmax);
+        node_index = stack[top].node;
     }
-    return found;
 }
 
 }  // namespace
@@ -163,17 +150,6 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         set_child(layout.nodes[0], 1, AABB::empty(), 0, 0);
         return;
     }
-    // Leaf triangles in leaf order; degenerate triangles are dropped (they are never hit).
-    auto add_leaf = [&](const BvhNode& leaf) {
-        const uint32_t first = uint32_t(layout.triangles.size());
-        for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
-            const uint32_t primitive = bvh.primitives[i];
-            const Triangle& triangle = scene.triangles[primitive];
-            if (triangle.is_degenerate()) continue;
-            layout.triangles.push_back({triangle.v0, triangle.v1, triangle.v2, primitive});
-        }
-        return std::pair{first, uint32_t(layout.triangles.size()) - first};
-    };
     // Depth-first order: a node's first inner child directly follows it, so a descent tends to stay
     // within neighbouring cache lines. `pending` holds inner BVH nodes whose compact node is not made
     // yet, with the place (compact node, slot) that must point at it.
@@ -184,7 +160,7 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
     auto set_from = [&](uint32_t compact, int slot, uint32_t bvh_index) {
         const BvhNode& child = bvh.nodes[bvh_index];
         if (child.is_leaf()) {
-            auto [first, count] = add_leaf(child);
+            auto [first, count] = trace::append_leaf_packs(scene, bvh, child, layout.packs);
             // A leaf of degenerate triangles only can never be hit: give it an empty box.
             set_child(layout.nodes[compact], slot, count ? child.bounds : AABB::empty(), count ? first : 0, count);
         } else {
@@ -192,7 +168,7 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         }
     };
 
-    layout.triangles.reserve(bvh.primitives.size());
+    layout.packs.reserve(bvh.primitives.size() / 2 + 1);
     layout.nodes.reserve(bvh.nodes.size() / 2 + 1);  // a binary tree of L leaves has L - 1 inner nodes
     layout.nodes.emplace_back();
     if (bvh.root().is_leaf()) {
@@ -261,7 +237,7 @@ void BinaryTracer::occluded(std::span<const Ray> rays, std::span<uint8_t> result
 }
 
 size_t BinaryTracer::memory_bytes() const {
-    return layout_->nodes.size() * sizeof(CompactNode) + layout_->triangles.size() * sizeof(LeafTriangle);
+    return layout_->nodes.size() * sizeof(CompactNode) + layout_->packs.size() * sizeof(trace::TrianglePack);
 }
 
 }  // namespace spacebvh

@@ -7,6 +7,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/scene.hpp"
 #include "trace/huge_page_allocator.hpp"
+#include "trace/triangle_pack.hpp"
 
 namespace spacebvh::trace {
 
@@ -14,7 +15,7 @@ namespace spacebvh::trace {
 // children. planes[2 * axis] holds the lower bounds on `axis`, planes[2 * axis + 1] the upper ones.
 // Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters.
 // child[i]: inner child (count[i] == 0): index of its WideNode; leaf (count[i] > 0): index of its
-// first TrianglePack, holding count[i] triangles in ceil(count[i] / 4) packs.
+// first TrianglePack (triangle_pack.hpp), holding count[i] triangles in ceil(count[i] / 4) packs.
 template <int W>
 struct alignas(64) WideNode {
     float planes[6][W];
@@ -23,17 +24,10 @@ struct alignas(64) WideNode {
 };
 static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256);
 
-// Four triangles in SoA: vertex[k][axis][lane]. Lanes past the leaf's count are unused (zero).
-struct alignas(16) TrianglePack {
-    float vertex[3][3][4];
-    uint32_t primitive[4];
-};
-static_assert(sizeof(TrianglePack) == 160);
-
 template <int W>
 struct WideLayout {
     std::vector<WideNode<W>, HugePageAllocator<WideNode<W>>> nodes;  // nodes[0] is the root
-    std::vector<TrianglePack, HugePageAllocator<TrianglePack>> packs;
+    TrianglePacks packs;
 };
 
 // Collapses the binary tree: each wide node takes its binary node's two children and repeatedly opens
