@@ -76,8 +76,9 @@ inline int intersect_children(const CompactNode& node, const SlabRay& slab, floa
 }
 
 // Closest hit (kAnyHit = false) or any hit. Leaf children are tested as soon as the ray enters them;
-// of two inner children the nearer is visited first. Stack entries keep their entry distance, so a
-// subtree entered beyond the closest hit found since it was pushed is skipped without fetching it.
+// of two inner children the nearer is visited first (the farther for any hit). Stack entries keep
+// their entry distance, so a subtree entered beyond the closest hit found since it was pushed is
+// skipped without fetching it.
 template <bool kAnyHit, bool kStats>
 bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     const SlabRay slab(ray);
@@ -121,9 +122,12 @@ bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, Trav
             }
         }
         if (inner_count == 2) {
+            // Nearer first for the closest hit, farther first for any hit (see visits_after in
+            // wide_kernel.inl for why and what it measured).
             const int near = inner[1].entry < inner[0].entry ? 1 : 0;
-            stack[top++] = inner[1 - near];
-            node_index = inner[near].node;
+            const int next = kAnyHit ? 1 - near : near;
+            stack[top++] = inner[1 - next];
+            node_index = inner[next].node;
             continue;
         }
         if (inner_count == 1 && inner[0].entry <= tmax) {

@@ -158,23 +158,18 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 }
             }
             if (assigned) {
-                // Nearest first by the entry distance of each child's first ray; the rest go on the stack.
+                // In visits_after's order (wide_kernel.inl) by the entry distance of each child's first ray;
+                // the rest go on the stack.
                 uint32_t order[W];
                 int n = 0;
                 for (unsigned bits = assigned; bits; bits &= bits - 1) {
                     const uint32_t slot = uint32_t(__builtin_ctz(bits));
                     int j = n++;
-                    while (j > 0 && first_entry[order[j - 1]] < first_entry[slot]) {
+                    while (j > 0 && visits_after<kAnyHit>(node, first_entry[slot], slot, first_entry[order[j - 1]], order[j - 1])) {
                         order[j] = order[j - 1];
                         --j;
                     }
                     order[j] = slot;
-                }
-                if constexpr (kAnyHit) {
-                    // Leaves last, so they are tested first (as the single-ray kernel does).
-                    int inner = 0;
-                    for (int k = 0; k < n; ++k)
-                        if (node.count[order[k]] == 0) std::swap(order[k], order[inner++]);
                 }
                 for (int k = 0; k < n - 1; ++k) stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]]};
                 current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]]};

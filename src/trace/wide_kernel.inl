@@ -58,6 +58,25 @@ template <class S, bool kAnyHit, bool kStats>
                                                                  hit, found, stats);
 }
 
+// The order children are visited in: true when child a (entered at entry_a) is visited after child b.
+// Closest hit: nearest first, so the hit found first prunes the rest. Any hit: leaves first (a hit
+// there ends the ray at once), then the inner children farthest first. Nearest first is the worst
+// order for occlusion: diffuse rays start on a surface, whose neighbourhood they must cross but which
+// rarely occludes them. Sponza, BVH8, boxes tested per occlusion ray (binned / spatial tree): diffuse
+// 35.2 / 63.0 in slot order, 43.0 / 87.0 nearest first, 27.1 / 30.0 farthest first; random and
+// primary 26.5 and 30.8 (binned, slot order) -> 21.2 and 27.6.
+template <bool kAnyHit, int W>
+[[gnu::always_inline]] inline bool visits_after(const WideNode<W>& node, float entry_a, uint32_t slot_a, float entry_b,
+                                                 uint32_t slot_b) {
+    if constexpr (kAnyHit) {
+        const bool leaf_a = node.count[slot_a] != 0, leaf_b = node.count[slot_b] != 0;
+        if (leaf_a != leaf_b) return leaf_b;
+        return entry_a < entry_b;
+    } else {
+        return entry_a > entry_b;
+    }
+}
+
 template <int W>
 [[gnu::always_inline]] inline void prefetch_node(const WideNode<W>& node) {
     for (size_t line = 0; line < sizeof(WideNode<W>); line += 64)
@@ -110,25 +129,19 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 continue;
             }
             if (hits > 1) {
-                if constexpr (!kAnyHit) {
-                    // Insertion sort, nearest last (ties keep slot order reversed; any order is exact).
-                    for (int i = 1; i < hits; ++i) {
-                        const float key = entry[i];
-                        const uint32_t key_slot = slot[i];
-                        int j = i - 1;
-                        while (j >= 0 && entry[j] < key) {
-                            entry[j + 1] = entry[j];
-                            slot[j + 1] = slot[j];
-                            --j;
-                        }
-                        entry[j + 1] = key;
-                        slot[j + 1] = key_slot;
+                // Insertion sort, the child to visit next last (see visits_after). Ties keep slot order
+                // reversed; any order is exact.
+                for (int i = 1; i < hits; ++i) {
+                    const float key = entry[i];
+                    const uint32_t key_slot = slot[i];
+                    int j = i - 1;
+                    while (j >= 0 && visits_after<kAnyHit>(node, key, key_slot, entry[j], slot[j])) {
+                        entry[j + 1] = entry[j];
+                        slot[j + 1] = slot[j];
+                        --j;
                     }
-                } else {
-                    // Any hit: leaves last, so they are tested first (a hit there ends the ray at once).
-                    int inner = 0;
-                    for (int i = 0; i < hits; ++i)
-                        if (node.count[slot[i]] == 0) std::swap(slot[i], slot[inner++]), std::swap(entry[i], entry[inner - 1]);
+                    entry[j + 1] = key;
+                    slot[j + 1] = key_slot;
                 }
                 for (int i = 0; i < hits - 1; ++i) stack[top++] = {node.child[slot[i]], node.count[slot[i]], entry[i]};
                 current = {node.child[slot[hits - 1]], node.count[slot[hits - 1]], entry[hits - 1]};
