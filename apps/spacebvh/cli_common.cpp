@@ -91,8 +91,8 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     optimize_iterations_option =
         command
             .add_option("--optimize-iterations", optimize_iterations,
-                         "effort of --optimize (implies it): at most this many batches of moves, each over the 5 % "
-                         "largest nodes; it stops earlier when a batch gains < 0.01 %")
+                         "effort of --optimize (implies it): at most this many batches of moves, each searching 5 % of "
+                         "the nodes (the largest not yet settled); it stops earlier once 20 batches in a row gain < 0.01 %")
             ->capture_default_str();
 }
 
