@@ -123,7 +123,7 @@ TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
     if (!std::filesystem::exists(scene_path(shared))) GTEST_SKIP() << "shared scene not found: " << scene_path(shared);
     if (skipped(shared, builder)) GTEST_SKIP() << builder << " is not run on " << shared.key << " (build time)";
     const Case c = load_case(shared);
-    const BuildOptions options = options_for(builder);
+    const BuildOptions options = testing_support::options_for_tree(builder);
     const Bvh bvh = build_bvh(c.scene, options);
     // Every kernel family on the same tree: the binary reference, both wide layouts and packets.
     for (const char* kernel : {"binary", "bvh4", "bvh8", "packet8"}) {
@@ -155,6 +155,10 @@ TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
 
 INSTANTIATE_TEST_SUITE_P(Shared, SharedSceneWithBuilder,
                          ::testing::Combine(::testing::ValuesIn(kSharedScenes), ::testing::ValuesIn(builder_names())),
+                         case_name);
+// Trees reshaped by the reinsertion optimiser (deeper, other child pairs) through every kernel.
+INSTANTIATE_TEST_SUITE_P(Optimized, SharedSceneWithBuilder,
+                         ::testing::Combine(::testing::ValuesIn(kSharedScenes), ::testing::Values("binned+opt")),
                          case_name);
 
 // The exact object sweep never gives a worse tree SAH than the binned approximation.

@@ -42,10 +42,18 @@ struct BuildCliOptions {
     uint32_t lookahead = 0, lookahead_candidates = 2;
     bool spatial_sweep = false;
     uint32_t sweep_samples = 0;
+    bool optimize = false;  // reinsertion optimisation after the build
+    uint32_t optimize_iterations = kDefaultReinsertionIterations;
+    const CLI::Option* optimize_iterations_option = nullptr;  // given: implies --optimize
 
     void add_to(CLI::App& command, bool with_builder = true);
+    // Options for a builder name; "NAME+opt" (e.g. binned+opt, embree-high+opt) turns the
+    // reinsertion optimisation on for that tree as --optimize does.
     BuildOptions options(const std::string& builder_name) const;
 };
+
+// "binned+opt" -> "binned", returning true; other names are left as they are.
+bool strip_optimize_suffix(std::string& builder_name);
 
 struct CommonOptions {
     unsigned threads = 0;  // 0: all cores

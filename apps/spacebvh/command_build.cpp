@@ -37,9 +37,9 @@ void add_build_command(CLI::App& app) {
 
         std::printf("scene            %s (%zu triangles)\n", scene.name.c_str(), scene.triangles.size());
         std::printf("builder          %s, %u threads\n", bvh.builder.c_str(), options->common.effective_threads());
-        std::printf("cost model       %s, max leaf %u, max depth %u, lookahead %u\n",
+        std::printf("cost model       %s, max leaf %u, max depth %u, lookahead %u, reinsertion iterations %u\n",
                     build_options.cost.describe().c_str(), build_options.max_leaf_size, build_options.max_depth,
-                    build_options.lookahead_depth);
+                    build_options.lookahead_depth, build_options.reinsertion_iterations);
         std::printf("build            %.1f ms\n", build_ms);
         std::printf("nodes            %zu (%zu inner, %zu leaves)\n", stats.nodes, stats.inner_nodes, stats.leaves);
         std::printf("depth            max %u, mean leaf %.2f\n", stats.max_depth, stats.mean_leaf_depth);
@@ -61,6 +61,7 @@ void add_build_command(CLI::App& app) {
                                                      ? nlohmann::json("inf")
                                                      : nlohmann::json(build_options.cost.overlap_penalty)}}},
                                {"lookahead_depth", build_options.lookahead_depth},
+                               {"reinsertion_iterations", build_options.reinsertion_iterations},
                                {"build_ms", build_ms},
                                {"peak_rss_bytes", peak_rss},
                                {"nodes", stats.nodes},

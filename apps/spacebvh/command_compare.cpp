@@ -78,8 +78,9 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8;lookahead=2": a
-// builder with some options of its own.
+// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
+// a builder with some options of its own. "NAME+opt" is NAME with the reinsertion optimisation; the
+// label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
 struct BuilderSpec {
     std::string label;
     BuildOptions options;
@@ -103,11 +104,16 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "candidates") spec.options.lookahead_candidates = parse_unsigned(value, "candidates");
             else if (key == "sweep") spec.options.exact_spatial_sweep = parse_unsigned(value, "sweep") != 0;
             else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
+            else if (key == "optimize") spec.options.reinsertion_iterations = parse_unsigned(value, "optimize");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates, sweep, samples)");
+                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
         }
         spec.options.validate();
     }
+    std::string name = text.substr(0, at);
+    strip_optimize_suffix(name);
+    spec.label = name + (spec.options.reinsertion_iterations > 0 ? "+opt" : "") +
+                 (at == std::string::npos ? "" : text.substr(at));
     return spec;
 }
 
@@ -166,7 +172,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K; the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();

@@ -57,6 +57,9 @@ std::string search_space_names(uint32_t search_spaces);
 
 // The deepest recursive cost evaluation BuildOptions accepts (the cost grows about linearly with it).
 inline constexpr uint32_t kMaxLookaheadDepth = 8;
+// Reinsertion optimisation: the most iterations BuildOptions accepts, and the effort of --optimize.
+inline constexpr uint32_t kMaxReinsertionIterations = 1000;
+inline constexpr uint32_t kDefaultReinsertionIterations = 16;
 
 struct BuildOptions {
     std::string builder = "binned";  // a name from builder_names()
@@ -93,6 +96,11 @@ struct BuildOptions {
     // Exact sweep: positions sampled inside the intervals next to the best event planes (0..64;
     // 0 = event planes only). See src/build/spatial_sweep_split_finder.hpp.
     uint32_t sweep_interior_samples = 0;
+    // After the build, optimise the tree by subtree reinsertion (Bittner et al. 2013; see
+    // optimize_bvh): at most this many iterations, each moving a batch of subtrees to places that
+    // lower the tree SAH; it stops earlier once an iteration gains little. 0 = off (every preset's
+    // default); kDefaultReinsertionIterations is the CLI's --optimize. Leaves stay as built.
+    uint32_t reinsertion_iterations = 0;
     // Called now and then with the fraction of references that have reached a leaf (0..1), from any
     // thread. May be empty.
     std::function<void(double)> progress;
@@ -114,6 +122,16 @@ std::string describe_builder(const std::string& name);
 // Builds a BVH over the scene's triangles with the calling thread's oneTBB arena (limit threads with
 // tbb::global_control or a tbb::task_arena). Deterministic: the same scene and options give the same
 // tree, whatever the thread count. An empty scene throws Error; a set cancel flag throws Cancelled.
+// With options.reinsertion_iterations > 0 the tree is then optimised (optimize_bvh) and its builder
+// name gets "+opt" ("binned+opt").
 Bvh build_bvh(const Scene& scene, const BuildOptions& options);
+
+// Reinsertion optimisation of any binary tree (ours, Embree's imported trees): moves subtrees to
+// where they lower the tree SAH under bvh.cost (the plain SAH: an overlap penalty C_o only prices
+// split choices), never raising it; leaves, their boxes and triangles stay; the depth stays within
+// options.max_depth (or the tree's own depth if it is deeper). Uses options.reinsertion_iterations
+// (nothing when 0), max_depth, progress and cancel (throws Cancelled; the tree is then unchanged).
+// Deterministic for any thread count. Appends "+opt" to bvh.builder when it ran.
+void optimize_bvh(Bvh& bvh, const BuildOptions& options);
 
 }  // namespace spacebvh

@@ -81,6 +81,15 @@ struct AABB {
 };
 
 constexpr AABB merge(const AABB& a, const AABB& b) { return {min(a.lo, b.lo), max(a.hi, b.hi)}; }
+// Surface area in double precision from the float box: how the tree SAH (and the reinsertion
+// optimiser pricing it) measures areas, so that sums over many nodes keep their precision.
+constexpr double area_in_double(const AABB& box) {
+    if (box.is_empty()) return 0.0;
+    const double ex = double(box.hi.x) - double(box.lo.x);
+    const double ey = double(box.hi.y) - double(box.lo.y);
+    const double ez = double(box.hi.z) - double(box.lo.z);
+    return 2.0 * (ex * ey + ey * ez + ez * ex);
+}
 // Intersection of two boxes; empty (lo > hi on some axis) when they are disjoint.
 constexpr AABB intersect(const AABB& a, const AABB& b) { return {max(a.lo, b.lo), min(a.hi, b.hi)}; }
 

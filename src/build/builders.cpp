@@ -7,6 +7,7 @@
 #include "build/grid_split_finder.hpp"
 #include "build/object_sweep_split_finder.hpp"
 #include "build/presplit.hpp"
+#include "build/reinsertion_optimizer.hpp"
 #include "build/search_spaces.hpp"
 #include "build/spatial_sweep_split_finder.hpp"
 #include "build/top_down_builder.hpp"
@@ -203,6 +204,20 @@ void BuildOptions::validate() const {
     if (object_bins < 2 || object_bins > build::kMaxObjectBins)
         throw Error("object bins must be in [2, " + std::to_string(build::kMaxObjectBins) + "], got " +
                     std::to_string(object_bins));
+    if (reinsertion_iterations > kMaxReinsertionIterations)
+        throw Error("reinsertion iterations must be in [0, " + std::to_string(kMaxReinsertionIterations) +
+                    "] (0 = no optimisation), got " + std::to_string(reinsertion_iterations));
+}
+
+void optimize_bvh(Bvh& bvh, const BuildOptions& options) {
+    if (options.reinsertion_iterations == 0) return;
+    build::ReinsertionOptions reinsertion;
+    reinsertion.iterations = options.reinsertion_iterations;
+    reinsertion.max_depth = options.max_depth;
+    reinsertion.progress = options.progress;
+    reinsertion.cancel = options.cancel;
+    build::optimize_by_reinsertion(bvh, reinsertion);
+    bvh.builder += "+opt";
 }
 
 Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
@@ -215,7 +230,11 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
     build::DriverOptions driver;
     driver.lookahead_depth = options.lookahead_depth;
     driver.lookahead_candidates = options.lookahead_candidates;
+    // With the optimisation, the build reports the first half of the progress and the optimiser the rest.
+    const bool optimizing = options.reinsertion_iterations > 0;
     driver.progress = options.progress;
+    if (optimizing && options.progress)
+        driver.progress = [report = options.progress](double fraction) { report(0.5 * fraction); };
     driver.cancel = options.cancel;
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
                                   build::make_search_spaces(spaces, scene.triangles, options, preset.allow_unsplitting,
@@ -236,6 +255,13 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
                                 : references.size();
     Bvh bvh = builder.build(std::move(references), capacity);
     bvh.builder = options.builder;
+    if (optimizing) {
+        BuildOptions optimization = options;
+        if (options.progress)
+            optimization.progress = [report = options.progress](double fraction) { report(0.5 + 0.5 * fraction); };
+        optimize_bvh(bvh, optimization);
+        if (options.progress) options.progress(1.0);
+    }
     return bvh;
 }
 

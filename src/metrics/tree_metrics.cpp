@@ -32,14 +32,6 @@
 namespace spacebvh {
 namespace {
 
-double box_area(const AABB& box) {
-    if (box.is_empty()) return 0.0;
-    double ex = double(box.hi.x) - double(box.lo.x);
-    double ey = double(box.hi.y) - double(box.lo.y);
-    double ez = double(box.hi.z) - double(box.lo.z);
-    return 2.0 * (ex * ey + ey * ez + ez * ex);
-}
-
 double triangle_area(const Triangle& t) {
     double ax = double(t.v1.x) - t.v0.x, ay = double(t.v1.y) - t.v0.y, az = double(t.v1.z) - t.v0.z;
     double bx = double(t.v2.x) - t.v0.x, by = double(t.v2.y) - t.v0.y, bz = double(t.v2.z) - t.v0.z;
@@ -84,10 +76,10 @@ void for_each_reachable(const Bvh& bvh, Visit&& visit) {
 
 double tree_sah(const Bvh& bvh, const CostModel& cost) {
     if (bvh.empty()) return 0.0;
-    double root_area = box_area(bvh.root().bounds);
+    double root_area = area_in_double(bvh.root().bounds);
     // A root of zero area (e.g. all triangles on one line or point): every ratio is taken as 1, as
     // CostModel::split_cost does for SA(N) = 0, so the SAH still counts the work.
-    auto ratio = [&](const AABB& box) { return root_area > 0.0 ? box_area(box) / root_area : 1.0; };
+    auto ratio = [&](const AABB& box) { return root_area > 0.0 ? area_in_double(box) / root_area : 1.0; };
     double sah = 0.0;
     for_each_reachable(bvh, [&](uint32_t index, uint32_t) {
         const BvhNode& node = bvh.nodes[index];
