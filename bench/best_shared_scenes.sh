@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Issue #5's comparison on our best trees: per shared scene (and crytek_sponza rotated 45/45/45),
+# the reinsertion-optimised `cbvh+opt` and `spatial+opt` trees under the BVH8 kernel (widest node
+# test) and 8x8 packets, against Embree 3 HIGH rtcIntersect1/rtcOccluded1 and rtcIntersect16/
+# rtcOccluded16 (its primary rays in 4x4 tiles), all in the same run, 2 threads. Primary rays are
+# in 8x8 tile order for every row. Mrays/s are medians of 5 timed runs; every answer is checked
+# against Embree with the exact arbiter ("wrong"). Ends with the ratio summary of
+# bench/summarize_best.py.
+# Usage: bash bench/best_shared_scenes.sh > best.md   (build first: scripts/build.sh)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scenes=../shared/scenes
+if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+cli=./build/spacebvh
+common=(--builders cbvh+opt,spatial+opt --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
+        --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
+echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"
+echo
+echo "Command: \`bash bench/best_shared_scenes.sh\` (compare ${common[*]})"
+echo
+for scene in bunny/bunny sibenik/sibenik coffee_maker/coffee_maker crytek_sponza/crytek_sponza living_room_3/living_room_3; do
+    "$cli" compare "$scenes/$scene.obj" "${common[@]}" --json "bench/best_$(basename $scene).json" | grep -v '^# '
+done
+"$cli" compare "$scenes/crytek_sponza/crytek_sponza.obj" --rotate x:45,y:45,z:45 "${common[@]}" \
+    --json bench/best_crytek_sponza_rotated.json | grep -v '^# '
+python3 bench/summarize_best.py bench/best_{bunny,sibenik,coffee_maker,crytek_sponza,living_room_3,crytek_sponza_rotated}.json
