@@ -37,8 +37,9 @@ std::pair<uint32_t, uint32_t> append_leaf_packs(const Scene& scene, const Bvh& b
 struct PackRay {
     __m128 org[3];
     __m128 shear_x, shear_y;
-    int kx, ky, kz;
+    int kx = 0, ky = 1, kz = 2;
 
+    PackRay() = default;
     explicit PackRay(const WatertightRay& w)
         : shear_x(_mm_set1_ps(w.shear_x)), shear_y(_mm_set1_ps(w.shear_y)), kx(w.kx), ky(w.ky), kz(w.kz) {
         for (int axis = 0; axis < 3; ++axis) org[axis] = _mm_set1_ps(w.org[axis]);
