@@ -11,16 +11,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=../shared/scenes
 if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
-cli=./build/spacebvh
 common=(--builders cbvh+opt,spatial+opt --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"
 echo
 echo "Command: \`bash bench/best_shared_scenes.sh\` (compare ${common[*]})"
 echo
-for scene in bunny/bunny sibenik/sibenik coffee_maker/coffee_maker crytek_sponza/crytek_sponza living_room_3/living_room_3; do
-    "$cli" compare "$scenes/$scene.obj" "${common[@]}" --json "bench/best_$(basename $scene).json" | grep -v '^# '
-done
-"$cli" compare "$scenes/crytek_sponza/crytek_sponza.obj" --rotate x:45,y:45,z:45 "${common[@]}" \
-    --json bench/best_crytek_sponza_rotated.json | grep -v '^# '
+bash bench/each_shared_scene.sh best "${common[@]}"
 python3 bench/summarize_best.py bench/best_{bunny,sibenik,coffee_maker,crytek_sponza,living_room_3,crytek_sponza_rotated}.json

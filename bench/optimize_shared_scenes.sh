@@ -9,18 +9,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=../shared/scenes
 if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
-cli=./build/spacebvh
 common=(--builders binned,binned+opt,cbvh+opt,spatial,spatial+opt --kernel bvh8 --embree high --embree-packets none
         --threads 2 --runs 5 --build-runs 3 --no-epo --quiet)
 stems=("$@")
 [ ${#stems[@]} -eq 0 ] && stems=(crytek_sponza crytek_sponza_rotated coffee_maker living_room_3 sibenik bunny)
 echo "Command: \`bash bench/optimize_shared_scenes.sh\` (compare ${common[*]})"
 echo
-for stem in "${stems[@]}"; do
-    if [ "$stem" = crytek_sponza_rotated ]; then
-        scene=(crytek_sponza/crytek_sponza.obj --rotate x:45,y:45,z:45)
-    else
-        scene=("$stem/$stem.obj")
-    fi
-    "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "${common[@]}" --json "bench/optimize_$stem.json" | grep -v '^# '
-done
+STEMS="${stems[*]}" bash bench/each_shared_scene.sh optimize "${common[@]}"

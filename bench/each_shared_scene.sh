@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Runs `spacebvh compare ARGS...` once per shared scene (one process per scene, so every row of a
+# scene's table is measured side by side), writing bench/PREFIX_STEM.json and printing the tables.
+# Stems: bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated (crytek_sponza
+# rotated 45/45/45), or those in $STEMS. Used by the bench/*_shared_scenes.sh scripts.
+# Usage: bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
+set -euo pipefail
+prefix=$1
+shift
+scenes=../shared/scenes
+cli=./build/spacebvh
+read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated}"
+for stem in "${stems[@]}"; do
+    if [ "$stem" = crytek_sponza_rotated ]; then
+        scene=(crytek_sponza/crytek_sponza.obj --rotate x:45,y:45,z:45)
+    else
+        scene=("$stem/$stem.obj")
+    fi
+    "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "bench/${prefix}_$stem.json" | grep -v '^# '
+done
