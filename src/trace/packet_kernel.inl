@@ -74,6 +74,24 @@ template <class S>
     return S::hit_mask(lower_widened, upper_widened);
 }
 
+// Whether one ray enters child `slot` of `node` within [tmin, tmax]: one lane of enter_children, with
+// the same operations in the same order (a NaN slab distance keeps the running bound; the exit
+// distance widened by kFarScale), so it never culls a child the ray's own node test would enter.
+template <int W>
+[[gnu::always_inline]] inline bool enters_child(const WideNode<W>& node, uint32_t slot, const float* org, const float* inv_dir,
+                                                float tmin, float tmax, const PacketFrustum& frustum) {
+    float near = tmin, far = tmax;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float t_entry = (node.planes[frustum.entry_plane[axis]][slot] - org[axis]) * inv_dir[axis];
+        const float t_exit = (node.planes[frustum.exit_plane[axis]][slot] - org[axis]) * inv_dir[axis];
+        near = t_entry > near ? t_entry : near;
+        far = t_exit < far ? t_exit : far;
+    }
+    const float widened = far * kFarScale;
+    const float limit = widened < tmax ? widened : tmax;
+    return near <= limit;
+}
+
 // One ray of a packet as enter_children sees it: its origin and inverse direction broadcast on demand
 // (cheap loads) instead of kept in registers per ray.
 template <class S>
@@ -121,12 +139,13 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
     }
     uint32_t unsettled = count;
 
+    // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
     struct Entry {
-        uint32_t child, count, first;
+        uint32_t child, count, first, parent, slot;
     };
     Entry stack[(W - 1) * 1024 + 1];
     int top = 0;
-    Entry current{0, 0, 0};
+    Entry current{0, 0, 0, 0, 0};
 
     while (true) {
         if (current.count == 0) {
@@ -171,15 +190,25 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     }
                     order[j] = slot;
                 }
-                for (int k = 0; k < n - 1; ++k) stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]]};
-                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]]};
+                for (int k = 0; k < n - 1; ++k)
+                    stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]], current.child, order[k]};
+                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]], current.child, order[n - 1]};
                 if (current.count == 0) prefetch_node(layout.nodes[current.child]);
                 continue;
             }
         } else {
+            // Only the first active ray is known to enter the leaf: the others test its box first
+            // (six planes against a pack test of four triangles).
+            const WideNode<W>& parent = layout.nodes[current.parent];
             for (uint32_t i = current.first; i < count; ++i) {
                 RayState& ray_state = state[i];
                 if (kAnyHit && occluded[i]) continue;
+                if (i != current.first) {
+                    if constexpr (kStats) stats->nodes_visited++;
+                    if (!enters_child(parent, current.slot, ray_state.org, ray_state.inv_dir, ray_state.tmin, ray_state.tmax,
+                                      frustum))
+                        continue;
+                }
                 const PackRay pack_ray(ray_state.shear);
                 Hit unused;
                 bool found = false;
