@@ -15,7 +15,5 @@ common=(--builders cbvh+opt,spatial+opt --kernel bvh8,packet8 --embree high --em
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"
 echo
-echo "Command: \`bash bench/best_shared_scenes.sh\` (compare ${common[*]})"
-echo
 bash bench/each_shared_scene.sh best "${common[@]}"
 python3 bench/summarize_best.py bench/best_{bunny,sibenik,coffee_maker,crytek_sponza,living_room_3,crytek_sponza_rotated}.json

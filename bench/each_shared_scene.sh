@@ -2,13 +2,16 @@
 # Runs `spacebvh compare ARGS...` once per shared scene (one process per scene, so every row of a
 # scene's table is measured side by side), writing bench/PREFIX_STEM.json and printing the tables.
 # Stems: bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated (crytek_sponza
-# rotated 45/45/45), or those in $STEMS. Used by the bench/*_shared_scenes.sh scripts.
+# rotated 45/45/45), or those in $STEMS. Used by bench/PREFIX_shared_scenes.sh, whose command line
+# it prints first.
 # Usage: bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
 set -euo pipefail
 prefix=$1
 shift
 scenes=../shared/scenes
 cli=./build/spacebvh
+echo "Command: \`bash bench/${prefix}_shared_scenes.sh\` (compare $*)"
+echo
 read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated}"
 for stem in "${stems[@]}"; do
     if [ "$stem" = crytek_sponza_rotated ]; then

@@ -14,6 +14,4 @@ common=(--builders spatial --kernel binary,bvh4,bvh8,packet8,packet16 --embree h
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 echo "## Kernels on the spatial tree against Embree, shared scenes"
 echo
-echo "Command: \`bash bench/kernels_shared_scenes.sh\` (compare ${common[*]})"
-echo
 bash bench/each_shared_scene.sh kernels "${common[@]}"

@@ -13,6 +13,4 @@ common=(--builders binned,binned+opt,cbvh+opt,spatial,spatial+opt --kernel bvh8 
         --threads 2 --runs 5 --build-runs 3 --no-epo --quiet)
 stems=("$@")
 [ ${#stems[@]} -eq 0 ] && stems=(crytek_sponza crytek_sponza_rotated coffee_maker living_room_3 sibenik bunny)
-echo "Command: \`bash bench/optimize_shared_scenes.sh\` (compare ${common[*]})"
-echo
 STEMS="${stems[*]}" bash bench/each_shared_scene.sh optimize "${common[@]}"
