@@ -153,16 +153,10 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, uint32_t m
             const AABB left_box = to_box(left), right_box = to_box(suffix[i]);
             const float split_cost = cost.split_cost(node.bounds, left_box, left_count, right_box, suffix_counts[i]);
             if (split_cost < sink.threshold(axis)) {
-                Split split;
-                split.kind = SplitKind::object_binned;
-                split.cost = split_cost;
-                split.axis = axis;
+                Split split =
+                    make_split(SplitKind::object_binned, split_cost, axis, left_box, left_count, right_box, suffix_counts[i]);
                 split.binning = binning[axis];
                 split.bin = i;
-                split.left_bounds = left_box;
-                split.right_bounds = right_box;
-                split.left_count = left_count;
-                split.right_count = suffix_counts[i];
                 sink.offer(split);
             }
         }

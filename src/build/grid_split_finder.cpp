@@ -330,12 +330,9 @@ Split GridSplitFinder::find(const NodeContext& context, const CostModel& cost) c
         if (!right_piece.bounds.is_empty()) right.extend(right_piece.bounds), ++right_count;
     }
     if (left_count == 0 || right_count == 0) return best;
-    best.kind = SplitKind::grid;
-    best.cost = cost.split_cost(node, left, left_count, right, right_count);
-    best.left_bounds = left;
-    best.right_bounds = right;
-    best.left_count = left_count;
-    best.right_count = right_count;
+    // Axis 0: a grid split has no plane; the regions below say where references go.
+    best = make_split(SplitKind::grid, cost.split_cost(node, left, left_count, right, right_count), 0, left, left_count, right,
+                      right_count);
     best.left_region = left_region;
     best.right_region = right_region;
     return best;

@@ -35,15 +35,9 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
             left.extend(references[i - 1].bounds);
             const float split_cost = cost.split_cost(node.bounds, left, i, suffix_bounds[i], count - i);
             if (split_cost < sink.threshold(axis)) {
-                Split split;
-                split.kind = SplitKind::object_sorted;
-                split.cost = split_cost;
-                split.axis = axis;
+                Split split = make_split(SplitKind::object_sorted, split_cost, axis, left, uint32_t(i), suffix_bounds[i],
+                                         uint32_t(count - i));
                 split.tie = references[i];
-                split.left_bounds = left;
-                split.right_bounds = suffix_bounds[i];
-                split.left_count = uint32_t(i);
-                split.right_count = uint32_t(count - i);
                 sink.offer(split);
             }
         }

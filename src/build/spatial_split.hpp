@@ -24,15 +24,8 @@ inline std::pair<Reference, Reference> split_reference(const Reference& referenc
 // A spatial split (SplitKind::spatial) at x[axis] = position, as both spatial search spaces report it.
 inline Split spatial_split(float cost, int axis, float position, const AABB& left_bounds, uint32_t left_count,
                            const AABB& right_bounds, uint32_t right_count, bool unsplit) {
-    Split split;
-    split.kind = SplitKind::spatial;
-    split.cost = cost;
-    split.axis = axis;
+    Split split = make_split(SplitKind::spatial, cost, axis, left_bounds, left_count, right_bounds, right_count);
     split.position = position;
-    split.left_bounds = left_bounds;
-    split.right_bounds = right_bounds;
-    split.left_count = left_count;
-    split.right_count = right_count;
     split.unsplit = unsplit;
     return split;
 }

@@ -61,6 +61,21 @@ struct Split {
     bool is_valid() const { return kind != SplitKind::none && cost < kInfinity; }
 };
 
+// The fields every search space fills: the kind, the cost, the axis and the two children the split
+// makes. Each finder then adds its own (the plane, the tie, the bin, the grid regions).
+inline Split make_split(SplitKind kind, float cost, int axis, const AABB& left_bounds, uint32_t left_count,
+                        const AABB& right_bounds, uint32_t right_count) {
+    Split split;
+    split.kind = kind;
+    split.cost = cost;
+    split.axis = axis;
+    split.left_bounds = left_bounds;
+    split.right_bounds = right_bounds;
+    split.left_count = left_count;
+    split.right_count = right_count;
+    return split;
+}
+
 // What a search space sees of a node.
 struct NodeContext {
     std::span<Reference> references;
