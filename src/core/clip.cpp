@@ -73,9 +73,9 @@ float next_up(float f) {
     return std::bit_cast<float>(f > 0.0f ? bits + 1 : bits - 1);
 }
 
-// Written as selects, not branches: about half the points need the step, unpredictably.
 constexpr double kHugeDouble = std::numeric_limits<double>::infinity();
 
+// Written as selects, not branches: about half the points need the step, unpredictably.
 float round_down(double value) {
     const float f = float(value);
     const float below = next_down(f);
@@ -358,8 +358,7 @@ void TrianglePiece::chop(int axis, std::span<const float> planes, std::span<AABB
     if (empty()) return;
     const size_t plane_count = planes.size();
     // The slabs' points, in double; only the slabs the polygon touches (touched_first..touched_last)
-    // are rounded at the end.
-    // Kept empty between calls: only the touched entries are written, and reset at the end.
+    // are rounded at the end, and reset there, so the scratch is all empty between calls.
     thread_local std::vector<DoubleBounds> slab_points;
     if (slab_points.size() < pieces.size()) slab_points.resize(pieces.size());
     size_t touched_first = pieces.size(), touched_last = 0;

@@ -59,7 +59,7 @@ public:
         for (int slot = 0; slot < int(children.size()); ++slot) {
             const BvhNode& child = bvh_.nodes[children[slot]];
             if (child.is_leaf()) {
-                const auto [first, count] = add_leaf(child);
+                const auto [first, count] = append_leaf_packs(scene_, bvh_, child, layout_.packs);
                 set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
             } else {
                 // Recursion depth is the tree depth, which build options cap at 1024.
@@ -71,8 +71,6 @@ public:
     }
 
 private:
-    std::pair<uint32_t, uint32_t> add_leaf(const BvhNode& leaf) { return append_leaf_packs(scene_, bvh_, leaf, layout_.packs); }
-
     const Scene& scene_;
     const Bvh& bvh_;
     WideLayout<W>& layout_;
