@@ -92,7 +92,9 @@ TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
                 std::vector<float> costs_on_axis[3];
                 for (size_t i = 0; i < candidates.size(); ++i) {
                     EXPECT_TRUE(candidates[i].is_valid());
-                    if (i > 0) EXPECT_GE(candidates[i].axis, candidates[i - 1].axis) << "axis by axis";
+                    if (i > 0) {
+                        EXPECT_GE(candidates[i].axis, candidates[i - 1].axis) << "axis by axis";
+                    }
                     costs_on_axis[candidates[i].axis].push_back(candidates[i].cost);
                 }
                 for (int axis = 0; axis < 3; ++axis) {
@@ -180,7 +182,9 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
             std::vector<Reference> greedy_storage = storage_of();
             const double greedy_subtree = lookahead.greedy_subtree_cost(greedy_storage, count, summary, 0, depth);
             EXPECT_EQ(choice.greedy_cost, greedy_subtree);
-            if (choice.greedy) EXPECT_EQ(choice.cost, greedy_subtree);
+            if (choice.greedy) {
+                EXPECT_EQ(choice.cost, greedy_subtree);
+            }
 
             if (depth != 1) continue;
             std::vector<Reference> manual = storage_of();

@@ -31,7 +31,7 @@ struct TopDownBuilder::Impl {
     const Lookahead& lookahead;
     std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
     size_t input_count = 0;
-    std::vector<SlotNode> slots;
+    std::vector<SlotNode> slots{};
     std::atomic<size_t> references_in_leaves{0};
     std::atomic<size_t> next_progress_report{0};
 
