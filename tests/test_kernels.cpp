@@ -21,6 +21,7 @@
 #include "spacebvh/verify.hpp"
 #include "spacebvh/wide_tracer.hpp"
 #include "test_support.hpp"
+#include "trace/triangle_pack.hpp"
 
 using namespace spacebvh;
 using testing_support::cached_builtin_scene;
@@ -149,7 +150,9 @@ TEST(Packets, PartlyInactiveAndIncoherentPacketsMatchTheArbiter) {
             for (size_t i = 0; i < rays.size(); ++i) {
                 wrong += !hits_agree(closest[i], arbiter_closest_hit(scene, rays[i]), rays[i], scene.diagonal());
                 wrong += occlusion[i].is_hit() != arbiter_occlusion(scene, rays[i]).is_hit();
-                if (rays[i].tmax < rays[i].tmin) EXPECT_FALSE(closest[i].is_hit()) << i;
+                if (rays[i].tmax < rays[i].tmin) {
+                    EXPECT_FALSE(closest[i].is_hit()) << i;
+                }
             }
             EXPECT_EQ(wrong, 0u);
         }
@@ -259,5 +262,53 @@ TEST(Kernels, EmptyAndSingleLeafTrees) {
         EXPECT_EQ(hit.primitive, 1u) << kernel;
         EXPECT_FLOAT_EQ(hit.t, 1.0f) << kernel;
         EXPECT_TRUE(tracer->occluded(down)) << kernel;
+    }
+}
+
+// The shared leaf packing (LeafPacker): every leaf's lanes hold all its non-degenerate triangles, each
+// lane a real triangle of the scene, no leaf's lanes reach past the filled lanes, and sharing packs
+// between neighbouring leaves stores fewer packs than one pack per started four triangles.
+TEST(Kernels, LeafPackerCoversEveryLeafAndSharesPacks) {
+    for (const std::string builder : {"cbvh", "spatial"}) {
+        const Scene& scene = cached_builtin_scene("interior");
+        const Bvh bvh = build_bvh(scene, options_for(builder));
+        trace::TrianglePacks packs;
+        trace::LeafPacker packer(scene, bvh, packs);
+        std::vector<std::pair<uint32_t, uint32_t>> placed;
+        size_t leaves = 0, packs_one_per_leaf = 0;
+        for (const BvhNode& node : bvh.nodes) {
+            if (!node.is_leaf()) continue;
+            ++leaves;
+            size_t live = 0;
+            for (uint32_t i = node.first; i < node.first + node.reference_count; ++i)
+                live += scene.triangles[bvh.primitives[i]].is_degenerate() ? 0 : 1;
+            packs_one_per_leaf += (live + 3) / 4;
+            const auto [first, count] = packer.add(node);
+            ASSERT_EQ(count == 0, live == 0) << builder;
+            placed.emplace_back(first, count);
+        }
+        size_t index = 0;
+        for (const BvhNode& node : bvh.nodes) {
+            if (!node.is_leaf()) continue;
+            const auto [first, count] = placed[index++];
+            std::set<uint32_t> lanes;
+            for (uint32_t lane = 0; lane < count; ++lane) {
+                ASSERT_LT(first + lane / 4, packs.size()) << builder;
+                const trace::TrianglePack& pack = packs[first + lane / 4];
+                const uint32_t primitive = pack.primitive[lane % 4];
+                ASSERT_LT(primitive, scene.triangles.size()) << builder;
+                Vec3 vertex[3];
+                trace::pack_triangle(pack, int(lane % 4), vertex);
+                const Triangle& triangle = scene.triangles[primitive];
+                EXPECT_TRUE(vertex[0] == triangle.v0 && vertex[1] == triangle.v1 && vertex[2] == triangle.v2) << builder;
+                lanes.insert(primitive);
+            }
+            for (uint32_t i = node.first; i < node.first + node.reference_count; ++i)
+                if (!scene.triangles[bvh.primitives[i]].is_degenerate()) {
+                    EXPECT_TRUE(lanes.count(bvh.primitives[i])) << builder << ": leaf misses triangle " << bvh.primitives[i];
+                }
+        }
+        EXPECT_GT(leaves, 100u) << builder;
+        EXPECT_LT(packs.size(), packs_one_per_leaf * 9 / 10) << builder << ": packs are not shared";
     }
 }

@@ -14,8 +14,8 @@ namespace spacebvh {
 // per axis [lo of child 0, lo of child 1, hi of child 0, hi of child 1].
 struct alignas(64) CompactNode {
     float planes[3][4];
-    // Inner child: index of its CompactNode, count = 0. Leaf child: its first TrianglePack, holding
-    // count > 0 triangles.
+    // Inner child: index of its CompactNode, count = 0. Leaf child: its first TrianglePack, tested as
+    // count > 0 lanes from there (LeafPacker).
     uint32_t child[2];
     uint32_t count[2];
 };
@@ -161,10 +161,11 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         uint32_t bvh_index, parent, slot;
     };
     std::vector<Pending> pending;
+    trace::LeafPacker packer(scene, bvh, layout.packs);
     auto set_from = [&](uint32_t compact, int slot, uint32_t bvh_index) {
         const BvhNode& child = bvh.nodes[bvh_index];
         if (child.is_leaf()) {
-            auto [first, count] = trace::append_leaf_packs(scene, bvh, child, layout.packs);
+            auto [first, count] = packer.add(child);
             // A leaf of degenerate triangles only can never be hit: give it an empty box.
             set_child(layout.nodes[compact], slot, count ? child.bounds : AABB::empty(), count ? first : 0, count);
         } else {
@@ -172,7 +173,7 @@ BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::ma
         }
     };
 
-    layout.packs.reserve(bvh.primitives.size() / 2 + 1);
+    layout.packs.reserve(bvh.primitives.size() / 4 + 1);
     layout.nodes.reserve(bvh.nodes.size() / 2 + 1);  // a binary tree of L leaves has L - 1 inner nodes
     layout.nodes.emplace_back();
     if (bvh.root().is_leaf()) {

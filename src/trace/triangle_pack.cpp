@@ -1,24 +1,44 @@
 #include "trace/triangle_pack.hpp"
 
+#include <algorithm>
+
 namespace spacebvh::trace {
 
-std::pair<uint32_t, uint32_t> append_leaf_packs(const Scene& scene, const Bvh& bvh, const BvhNode& leaf, TrianglePacks& packs) {
-    const uint32_t first_pack = uint32_t(packs.size());
-    uint32_t count = 0;
-    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
-        const uint32_t primitive = bvh.primitives[i];
-        const Triangle& triangle = scene.triangles[primitive];
-        if (triangle.is_degenerate()) continue;
-        const int lane = int(count % 4);
-        if (lane == 0) packs.push_back(TrianglePack{});
-        TrianglePack& pack = packs.back();
-        const Vec3* vertices[3] = {&triangle.v0, &triangle.v1, &triangle.v2};
-        for (int k = 0; k < 3; ++k)
-            for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][lane] = (*vertices[k])[axis];
-        pack.primitive[lane] = primitive;
-        ++count;
+void LeafPacker::put(uint32_t primitive) {
+    if (open_lanes_ == 4) {
+        packs_.push_back(TrianglePack{});
+        open_lanes_ = 0;
     }
-    return {count ? first_pack : 0, count};
+    TrianglePack& pack = packs_.back();
+    const Triangle& triangle = scene_.triangles[primitive];
+    const Vec3* vertices[3] = {&triangle.v0, &triangle.v1, &triangle.v2};
+    for (int k = 0; k < 3; ++k)
+        for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][open_lanes_] = (*vertices[k])[axis];
+    pack.primitive[open_lanes_] = primitive;
+    ++open_lanes_;
+}
+
+std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
+    std::vector<uint32_t> triangles;
+    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
+        if (!scene_.triangles[bvh_.primitives[i]].is_degenerate()) triangles.push_back(bvh_.primitives[i]);
+    if (triangles.empty()) return {0, 0};
+
+    if (open_lanes_ < 4) {
+        const uint32_t* open_begin = packs_.back().primitive;
+        const uint32_t* open_end = open_begin + open_lanes_;
+        std::vector<uint32_t> fresh;
+        for (uint32_t primitive : triangles)
+            if (std::find(open_begin, open_end, primitive) == open_end) fresh.push_back(primitive);
+        if (open_lanes_ + fresh.size() <= 4) {
+            for (uint32_t primitive : fresh) put(primitive);
+            return {uint32_t(packs_.size() - 1), open_lanes_};
+        }
+    }
+    open_lanes_ = 4;  // start a new pack
+    const uint32_t first = uint32_t(packs_.size());
+    for (uint32_t primitive : triangles) put(primitive);
+    return {first, uint32_t(triangles.size())};
 }
 
 }  // namespace spacebvh::trace

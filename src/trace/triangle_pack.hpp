@@ -19,7 +19,7 @@
 
 namespace spacebvh::trace {
 
-// Four triangles in SoA: vertex[k][axis][lane]. Lanes past the leaf's count are unused (zero).
+// Four triangles in SoA: vertex[k][axis][lane]. Lanes past the last filled one are unused (zero).
 struct alignas(16) TrianglePack {
     float vertex[3][3][4];
     uint32_t primitive[4];
@@ -28,10 +28,31 @@ static_assert(sizeof(TrianglePack) == 160);
 
 using TrianglePacks = std::vector<TrianglePack, HugePageAllocator<TrianglePack>>;
 
-// Appends the triangles of `leaf` to `packs`, in leaf order, in ceil(count / 4) new packs; degenerate
-// triangles are dropped (they are never hit). Returns {first pack, triangle count}; {0, 0} when every
-// triangle was degenerate.
-std::pair<uint32_t, uint32_t> append_leaf_packs(const Scene& scene, const Bvh& bvh, const BvhNode& leaf, TrianglePacks& packs);
+// Lays out the triangles of leaves, in the order the layout visits them, into shared packs. A kernel
+// tests a leaf as {first pack, lane count}: lanes 0 .. count-1 of packs first, first + 1, ...
+//
+// Most leaves of an SAH tree hold one to three triangles, so a pack per leaf would leave half the
+// lanes (and of the memory a ray fetches) empty. Instead a leaf whose new triangles fit in the lanes
+// left in the last pack goes there, and its count covers the triangles of the earlier leaves in that
+// pack too. Testing those costs nothing (the four lanes are tested together) and cannot change an
+// answer: each is a real triangle of the scene, and a hit on it is a real hit within [tmin, tmax],
+// which only narrows tmax sooner. A triangle already in that pack (a neighbour's clipped reference)
+// is not stored twice. Degenerate triangles are dropped: they are never hit.
+class LeafPacker {
+public:
+    LeafPacker(const Scene& scene, const Bvh& bvh, TrianglePacks& packs) : scene_(scene), bvh_(bvh), packs_(packs) {}
+
+    // Returns {first pack, lane count}; {0, 0} when every triangle of the leaf is degenerate.
+    std::pair<uint32_t, uint32_t> add(const BvhNode& leaf);
+
+private:
+    void put(uint32_t primitive);
+
+    const Scene& scene_;
+    const Bvh& bvh_;
+    TrianglePacks& packs_;
+    uint32_t open_lanes_ = 4;  // lanes filled in packs_.back(); 4 = no room left
+};
 
 // Per-ray constants of the four-wide watertight triangle test (the shear of WatertightRay, broadcast).
 struct PackRay {
@@ -96,8 +117,8 @@ struct PackEdges {
     for (int k = 0; k < 3; ++k) vertex[k] = {pack.vertex[k][0][lane], pack.vertex[k][1][lane], pack.vertex[k][2][lane]};
 }
 
-// Tests a leaf's `count` triangles (from pack `first`) in their leaf order, so a hit at equal distance
-// resolves the same way in every kernel. kScalarTriangles tests them one at a time with the scalar
+// Tests a leaf's `count` lanes (from pack `first`) in lane order, so a hit at equal distance resolves
+// the same way in every kernel that shares the packing. kScalarTriangles tests them one at a time with the scalar
 // test (the reference kernels). Narrows `tmax` and fills `hit` on each closer hit; returns true on a
 // hit when kAnyHit.
 template <bool kScalarTriangles, bool kAnyHit, bool kStats>

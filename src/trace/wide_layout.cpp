@@ -25,7 +25,8 @@ WideNode<W> empty_node() {
 template <int W>
 class Collapser {
 public:
-    Collapser(const Scene& scene, const Bvh& bvh, WideLayout<W>& layout) : scene_(scene), bvh_(bvh), layout_(layout) {}
+    Collapser(const Scene& scene, const Bvh& bvh, WideLayout<W>& layout)
+        : bvh_(bvh), layout_(layout), packer_(scene, bvh, layout.packs) {}
 
     // Makes the wide node for binary inner node (or, for a leaf root, a node with that one leaf) and
     // its subtree; returns its index.
@@ -56,24 +57,27 @@ public:
 
         const uint32_t index = uint32_t(layout_.nodes.size());
         layout_.nodes.push_back(empty_node<W>());
+        // Leaves first, so the leaves of one node share packs (LeafPacker), then the subtrees.
         for (int slot = 0; slot < int(children.size()); ++slot) {
             const BvhNode& child = bvh_.nodes[children[slot]];
-            if (child.is_leaf()) {
-                const auto [first, count] = append_leaf_packs(scene_, bvh_, child, layout_.packs);
-                set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
-            } else {
-                // Recursion depth is the tree depth, which build options cap at 1024.
-                const uint32_t inner = make_node(children[slot]);
-                set_child(layout_.nodes[index], slot, child.bounds, inner, 0);
-            }
+            if (!child.is_leaf()) continue;
+            const auto [first, count] = packer_.add(child);
+            set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
+        }
+        for (int slot = 0; slot < int(children.size()); ++slot) {
+            const BvhNode& child = bvh_.nodes[children[slot]];
+            if (child.is_leaf()) continue;
+            // Recursion depth is the tree depth, which build options cap at 1024.
+            const uint32_t inner = make_node(children[slot]);
+            set_child(layout_.nodes[index], slot, child.bounds, inner, 0);
         }
         return index;
     }
 
 private:
-    const Scene& scene_;
     const Bvh& bvh_;
     WideLayout<W>& layout_;
+    LeafPacker packer_;
 };
 
 }  // namespace
@@ -86,7 +90,7 @@ WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh) {
         return layout;
     }
     layout.nodes.reserve(bvh.nodes.size() / (W - 1) + 1);
-    layout.packs.reserve(bvh.primitives.size() / 2 + 1);
+    layout.packs.reserve(bvh.primitives.size() / 4 + 1);
     Collapser<W>(scene, bvh, layout).make_node(0);
     return layout;
 }

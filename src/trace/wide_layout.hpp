@@ -15,7 +15,7 @@ namespace spacebvh::trace {
 // children. planes[2 * axis] holds the lower bounds on `axis`, planes[2 * axis + 1] the upper ones.
 // Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters.
 // child[i]: inner child (count[i] == 0): index of its WideNode; leaf (count[i] > 0): index of its
-// first TrianglePack (triangle_pack.hpp), holding count[i] triangles in ceil(count[i] / 4) packs.
+// first TrianglePack (triangle_pack.hpp); it is tested as count[i] lanes from there (LeafPacker).
 template <int W>
 struct alignas(64) WideNode {
     float planes[6][W];
