@@ -84,6 +84,8 @@ bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, Trav
     const SlabRay slab(ray);
     const trace::WatertightRay shear(ray);
     const trace::PackRay pack_ray(shear);
+    const CompactNode* nodes = layout.nodes.data();
+    const trace::TrianglePack* packs = layout.packs.data();
     float tmax = ray.tmax;
     bool found = false;
 
@@ -96,14 +98,19 @@ bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, Trav
     uint32_t node_index = 0;
 
     while (true) {
-        const CompactNode& node = layout.nodes[node_index];
+        const CompactNode& node = nodes[node_index];
         // The walk is bound by memory latency: start fetching both children (node or leaf triangles)
-        // now, so the fetch overlaps this node's box tests.
+        // now, so the fetch overlaps this node's box tests. An inner child's first inner child is laid
+        // out right after it: fetching that line too saves a wait one level further down (Sponza
+        // random rays 1.04-1.08x; a third line was slower).
         for (int slot = 0; slot < 2; ++slot) {
-            if (node.count[slot])
-                trace::prefetch_pack(layout.packs[node.child[slot]]);
-            else
-                _mm_prefetch(reinterpret_cast<const char*>(&layout.nodes[node.child[slot]]), _MM_HINT_T0);
+            if (node.count[slot]) {
+                trace::prefetch_pack(packs[node.child[slot]]);
+            } else {
+                const CompactNode* child = nodes + node.child[slot];
+                _mm_prefetch(reinterpret_cast<const char*>(child), _MM_HINT_T0);
+                _mm_prefetch(reinterpret_cast<const char*>(child + 1), _MM_HINT_T0);
+            }
         }
         if constexpr (kStats) stats->nodes_visited += 2;
         float entry[2];
@@ -114,7 +121,7 @@ bool traverse(const BinaryTracer::Layout& layout, const Ray& ray, Hit& hit, Trav
         for (int slot = 0; slot < 2; ++slot) {
             if (!(mask & (1 << slot))) continue;
             if (node.count[slot] > 0) {
-                if (trace::test_leaf_packs<false, kAnyHit, kStats>(layout.packs.data(), node.child[slot], node.count[slot], ray,
+                if (trace::test_leaf_packs<false, kAnyHit, kStats>(packs, node.child[slot], node.count[slot], ray,
                                                                   shear, pack_ray, tmax, hit, found, stats))
                     return true;
             } else {
