@@ -48,28 +48,46 @@ struct BinGrid {
         }
     }
 
-    void add(std::span<const Reference> references) {
-        // The same float operations as ObjectBinning::bin_of, so partitioning reproduces these bins.
-        const __m128 origin = _mm_setr_ps(binning[0].origin, binning[1].origin, binning[2].origin, 0.0f);
-        const __m128 scale = _mm_setr_ps(binning[0].scale, binning[1].scale, binning[2].scale, 0.0f);
-        const __m128 last_bin = _mm_set1_ps(float(bin_count - 1));
-        const __m128 half = _mm_set1_ps(0.5f);
-        for (const Reference& reference : references) {
-            // Reference is {lo.xyz, hi.xyz, primitive}: both loads stay inside it; lane 3 is ignored.
-            const __m128 lo = _mm_loadu_ps(&reference.bounds.lo.x);
-            const __m128 hi = _mm_loadu_ps(&reference.bounds.hi.x);
-            const __m128 centroid = _mm_mul_ps(half, _mm_add_ps(lo, hi));
-            const __m128 position = _mm_mul_ps(_mm_sub_ps(centroid, origin), scale);
-            const __m128 clamped = _mm_min_ps(_mm_max_ps(position, _mm_setzero_ps()), last_bin);
-            alignas(16) int32_t index[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(index), _mm_cvttps_epi32(clamped));
-            for (int axis = 0; axis < 3; ++axis) {
-                Bin& bin = bins[axis][index[axis]];
-                bin.lo = _mm_min_ps(bin.lo, lo);
-                bin.hi = _mm_max_ps(bin.hi, hi);
-                counts[axis][index[axis]]++;
-            }
+    // The same float operations as ObjectBinning::bin_of, so partitioning reproduces these bins.
+    struct Binner {
+        __m128 origin, scale, last_bin;
+        explicit Binner(const std::array<ObjectBinning, 3>& binning, uint32_t bin_count)
+            : origin(_mm_setr_ps(binning[0].origin, binning[1].origin, binning[2].origin, 0.0f)),
+              scale(_mm_setr_ps(binning[0].scale, binning[1].scale, binning[2].scale, 0.0f)),
+              last_bin(_mm_set1_ps(float(bin_count - 1))) {}
+    };
+    [[gnu::always_inline]] void add_one(const Binner& binner, const Reference& reference) {
+        // Reference is {lo.xyz, hi.xyz, primitive}: both loads stay inside it; lane 3 is ignored.
+        const __m128 lo = _mm_loadu_ps(&reference.bounds.lo.x);
+        const __m128 hi = _mm_loadu_ps(&reference.bounds.hi.x);
+        const __m128 centroid = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
+        const __m128 position = _mm_mul_ps(_mm_sub_ps(centroid, binner.origin), binner.scale);
+        const __m128 clamped = _mm_min_ps(_mm_max_ps(position, _mm_setzero_ps()), binner.last_bin);
+        alignas(16) int32_t index[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(index), _mm_cvttps_epi32(clamped));
+        for (int axis = 0; axis < 3; ++axis) {
+            Bin& bin = bins[axis][index[axis]];
+            bin.lo = _mm_min_ps(bin.lo, lo);
+            bin.hi = _mm_max_ps(bin.hi, hi);
+            counts[axis][index[axis]]++;
         }
+    }
+    void add(std::span<const Reference> references) {
+        const Binner binner(binning, bin_count);
+        // Neighbouring references tend to fall in the same bins; alternating between two sets of bins
+        // keeps one update from waiting on the previous one. Merging is exact (min, max, sums).
+        if (references.size() < 32) {
+            for (const Reference& reference : references) add_one(binner, reference);
+            return;
+        }
+        BinGrid odd(binning);
+        size_t i = 0;
+        for (; i + 1 < references.size(); i += 2) {
+            add_one(binner, references[i]);
+            odd.add_one(binner, references[i + 1]);
+        }
+        if (i < references.size()) add_one(binner, references[i]);
+        merge(odd);
     }
     void merge(const BinGrid& other) {
         for (int axis = 0; axis < 3; ++axis)

@@ -133,13 +133,25 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
                         std::span<const Triangle> triangles) {
     if (split.kind == SplitKind::spatial) return apply_spatial_split(storage, count, split, triangles);
     if (split.kind == SplitKind::grid) return apply_grid_split(storage, count, split, triangles);
-    auto middle = std::partition(storage.begin(), storage.begin() + count,
-                                 [&](const Reference& reference) { return goes_left(reference, split); });
+    auto middle = storage.begin();
+    if (split.kind == SplitKind::object_binned) {
+        // The common case of the binned builders, without goes_left's dispatch per reference.
+        const ObjectBinning binning = split.binning;
+        const int axis = split.axis;
+        const uint32_t bin = split.bin;
+        middle = std::partition(storage.begin(), storage.begin() + count,
+                                [&](const Reference& reference) { return binning.bin_of(reference.centroid(axis)) < bin; });
+    } else {
+        middle = std::partition(storage.begin(), storage.begin() + count,
+                                [&](const Reference& reference) { return goes_left(reference, split); });
+    }
     const uint32_t left_count = uint32_t(middle - storage.begin());
     const ChildRanges ranges = share_capacity(uint32_t(storage.size()), left_count, count - left_count);
-    // The right block moves up to where the right child's capacity starts (never down).
-    std::move_backward(storage.begin() + left_count, storage.begin() + count,
-                       storage.begin() + ranges.left_capacity + ranges.right_count);
+    // The right block moves up to where the right child's capacity starts (never down); without spare
+    // capacity (no spatial splits) it is already there.
+    if (ranges.left_capacity != left_count)
+        std::move_backward(storage.begin() + left_count, storage.begin() + count,
+                           storage.begin() + ranges.left_capacity + ranges.right_count);
     return ranges;
 }
 
