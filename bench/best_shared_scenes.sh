@@ -5,15 +5,29 @@
 # rtcOccluded16 (its primary rays in 4x4 tiles), all in the same run, 2 threads. Primary rays are
 # in 8x8 tile order for every row. Mrays/s are medians of 5 timed runs; every answer is checked
 # against Embree with the exact arbiter ("wrong"). Ends with the ratio summary of
-# bench/summarize_best.py.
-# Usage: bash bench/best_shared_scenes.sh > best.md   (build first: scripts/build.sh)
+# bench/summarize_best.py. RUNS=N repeats the whole comparison N times (the machine is shared and
+# Embree's rows vary between runs), keeps each run's JSON in bench/best_runs/RUN/ and summarizes the
+# median ratio of each cell.
+# Usage: [RUNS=3] bash bench/best_shared_scenes.sh > best.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=../shared/scenes
 if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
 common=(--builders cbvh+opt,spatial+opt --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
+runs=${RUNS:-1}
 echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"
 echo
-bash bench/each_shared_scene.sh best "${common[@]}"
-python3 bench/summarize_best.py bench/best_{bunny,sibenik,coffee_maker,crytek_sponza,living_room_3,crytek_sponza_rotated}.json
+for run in $(seq 1 "$runs"); do
+    [ "$runs" -gt 1 ] && echo "### Run $run of $runs" && echo
+    bash bench/each_shared_scene.sh best "${common[@]}"
+    if [ "$runs" -gt 1 ]; then
+        mkdir -p "bench/best_runs/$run"
+        cp bench/best_*.json "bench/best_runs/$run/"
+    fi
+done
+if [ "$runs" -gt 1 ]; then
+    python3 bench/summarize_best.py $(seq -f "bench/best_runs/%g" 1 "$runs")
+else
+    python3 bench/summarize_best.py bench/best_{bunny,sibenik,coffee_maker,crytek_sponza,living_room_3,crytek_sponza_rotated}.json
+fi

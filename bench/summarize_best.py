@@ -4,9 +4,12 @@
 Per scene and ray kind: our fastest row (any builder, any kernel) / Embree HIGH rtcIntersect1 or
 rtcOccluded1, next to the goal max(1.0, tinybvh / Embree at 2 threads from
 ../shared/research/peers-measured.md); and our best packet row / Embree HIGH rtcIntersect16 on
-primary rays (goal 1.0). Every figure comes from one compare run per scene.
+primary rays (goal 1.0). Each ratio comes from one compare run per scene (rows side by side); given
+several runs (directories), each cell is the median of its per-run ratios.
 """
+import glob
 import json
+import os
 import sys
 
 # tinybvh / Embree HIGH, 2 threads (../shared/research/peers-measured.md): random, random occl.,
@@ -20,30 +23,59 @@ PEER_RATIOS = {
 COLUMNS = [(kind, field) for kind in ("random", "primary", "diffuse") for field in ("closest_mrays", "occlusion_mrays")]
 
 
-def summarize(path):
+def ratios(path):
+    """One run of one scene: (scene, [(ratio, tree, kernel) per column], packet ratio, wrong answers)."""
     data = json.load(open(path))
     scene = data["scenes"][0]
-    name = path.rsplit("best_", 1)[-1].removesuffix(".json")
+    name = os.path.basename(path).removeprefix("best_").removesuffix(".json")
     rows = scene["rows"]
     ours = [r for r in rows if not r["builder"].startswith("embree")]
     single = next(r for r in rows if r["builder"] == "embree-high" and "Intersect1/" in r["kernel"])
     packets = next(r for r in rows if r["builder"] == "embree-high" and "Intersect16" in r["kernel"])
-    goals = PEER_RATIOS.get(name, (1.0,) * 6)
     cells = []
-    for (kind, field), peer in zip(COLUMNS, goals):
+    for kind, field in COLUMNS:
         best = max(ours, key=lambda r: r[kind][field])
-        ratio = best[kind][field] / single[kind][field]
-        tree = best["builder"].split(" ")[0]
-        cells.append(f"{ratio:.2f} ({tree}, {best[kind]['kernel']}; goal {max(1.0, peer):.2f})")
+        cells.append((best[kind][field] / single[kind][field], best["builder"].split(" ")[0], best[kind]["kernel"]))
     packet_rows = [r for r in ours if r["kernel"].startswith("packet")]
     best_packet = max(packet_rows, key=lambda r: r["primary"]["closest_mrays"])
     packet_ratio = best_packet["primary"]["closest_mrays"] / packets["primary"]["closest_mrays"]
     wrong = sum(r[kind].get("wrong", 0) for r in rows for kind in ("random", "primary", "diffuse"))
-    return f"| {name} | " + " | ".join(cells) + f" | {packet_ratio:.2f} | {wrong} |"
+    return name, cells, packet_ratio, wrong
 
 
+def table_row(runs):
+    """Runs of one scene: each cell is the median ratio over the runs (each ratio measured within one
+    run), with the tree and kernel of the median run and, for several runs, the range."""
+    name = runs[0][0]
+    goals = PEER_RATIOS.get(name, (1.0,) * 6)
+    cells = []
+    for column, peer in enumerate(goals):
+        ordered = sorted(run[1][column] for run in runs)
+        ratio, tree, kernel = ordered[len(ordered) // 2]
+        spread = f", runs {ordered[0][0]:.2f}-{ordered[-1][0]:.2f}" if len(runs) > 1 else ""
+        cells.append(f"{ratio:.2f} ({tree}, {kernel}; goal {max(1.0, peer):.2f}{spread})")
+    packet = sorted(run[2] for run in runs)
+    packet_cell = f"{packet[len(packet) // 2]:.2f}" + (f" ({packet[0]:.2f}-{packet[-1]:.2f})" if len(runs) > 1 else "")
+    wrong = sum(run[3] for run in runs)
+    return f"| {name} | " + " | ".join(cells) + f" | {packet_cell} | {wrong} |"
+
+
+# Arguments: JSON files (one run) or directories (one run each, holding best_SCENE.json files).
+paths = sys.argv[1:]
+if all(os.path.isdir(p) for p in paths):
+    by_scene = {}
+    for directory in paths:
+        for file in sorted(glob.glob(os.path.join(directory, "best_*.json"))):
+            run = ratios(file)
+            by_scene.setdefault(run[0], []).append(run)
+    order = ["bunny", "sibenik", "coffee_maker", "crytek_sponza", "living_room_3", "crytek_sponza_rotated"]
+    groups = [by_scene[name] for name in order if name in by_scene]
+else:
+    groups = [[ratios(path)] for path in paths]
+print(f"{len(groups[0]) if groups else 0} run(s); cell = median over runs of our fastest row / Embree HIGH single rays")
+print()
 print("| scene | random closest | random occl. | primary closest | primary occl. | diffuse closest | diffuse occl. |"
       " packets / rtcIntersect16 (primary) | wrong |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-for path in sys.argv[1:]:
-    print(summarize(path))
+for runs in groups:
+    print(table_row(runs))
