@@ -92,6 +92,35 @@ template <int W>
     return near <= limit;
 }
 
+// Rays packed structure-of-arrays, so the leaf box test below runs over S::kLanes rays at once.
+// Entries from `count` up to the next multiple of the lane count hold a ray that enters nothing
+// (tmin = +inf, tmax = -inf).
+struct PacketRaysSoA {
+    alignas(64) float org[3][kMaxPacket];
+    alignas(64) float inv_dir[3][kMaxPacket];
+    alignas(64) float tmin[kMaxPacket];
+    alignas(64) float tmax[kMaxPacket];
+};
+
+// Bit j set when ray base + j enters child `slot` of `node` within its [tmin, tmax]: enters_child for
+// S::kLanes rays, lane by lane the same operations in the same order (the rays of a packet share
+// their entry and exit planes), so it decides exactly as enters_child would.
+template <class S>
+[[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot, const PacketRaysSoA& rays,
+                                                           uint32_t base, const PacketFrustum& frustum) {
+    using F = typename S::F;
+    F near = S::load(rays.tmin + base), far = S::load(rays.tmax + base);
+    for (int axis = 0; axis < 3; ++axis) {
+        const F org = S::load(rays.org[axis] + base), inv_dir = S::load(rays.inv_dir[axis] + base);
+        const F t_entry = S::mul(S::sub(S::set1(node.planes[frustum.entry_plane[axis]][slot]), org), inv_dir);
+        const F t_exit = S::mul(S::sub(S::set1(node.planes[frustum.exit_plane[axis]][slot]), org), inv_dir);
+        near = S::max(t_entry, near);
+        far = S::min(t_exit, far);
+    }
+    const F tmax = S::load(rays.tmax + base);
+    return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
+}
+
 // One ray of a packet as enter_children sees it: its origin and inverse direction broadcast on demand
 // (cheap loads) instead of kept in registers per ray.
 template <class S>
@@ -126,16 +155,23 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         WatertightRay shear;
     };
     RayState state[kMaxPacket];
+    PacketRaysSoA soa;
     for (uint32_t i = 0; i < count; ++i) {
         for (int axis = 0; axis < 3; ++axis) {
-            state[i].org[axis] = rays[i].org[axis];
-            state[i].inv_dir[axis] = 1.0f / rays[i].dir[axis];
+            state[i].org[axis] = soa.org[axis][i] = rays[i].org[axis];
+            state[i].inv_dir[axis] = soa.inv_dir[axis][i] = 1.0f / rays[i].dir[axis];
         }
-        state[i].tmin = rays[i].tmin;
-        state[i].tmax = rays[i].tmax;
+        state[i].tmin = soa.tmin[i] = rays[i].tmin;
+        state[i].tmax = soa.tmax[i] = rays[i].tmax;
         state[i].shear = WatertightRay(rays[i]);
         if constexpr (kAnyHit) occluded[i] = 0;
         else hits[i] = Hit{};
+    }
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    for (uint32_t i = count; i % L != 0; ++i) {
+        for (int axis = 0; axis < 3; ++axis) soa.org[axis][i] = soa.inv_dir[axis][i] = 0.0f;
+        soa.tmin[i] = kInfinity;
+        soa.tmax[i] = -kInfinity;
     }
     uint32_t unsettled = count;
 
@@ -198,17 +234,25 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             }
         } else {
             // Only the first active ray is known to enter the leaf: the others test its box first
-            // (six planes against a pack test of four triangles).
+            // (six planes against a pack test of four triangles), S::kLanes rays at a time.
             const WideNode<W>& parent = layout.nodes[current.parent];
-            for (uint32_t i = current.first; i < count; ++i) {
+            // The rays that enter the leaf: the box test only reads each ray's own tmax, which only
+            // its own triangle tests change, so all of them can be found before any is tested.
+            uint32_t entering_rays[kMaxPacket];
+            uint32_t n = 0;
+            if (!(kAnyHit && occluded[current.first])) entering_rays[n++] = current.first;
+            for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
+                // Settled occlusion rays have tmax = -inf: they enter nothing.
+                unsigned entering = rays_entering_child<S>(parent, current.slot, soa, base, frustum);
+                if (base <= current.first) entering &= ~((2u << (current.first - base)) - 1);  // rays after the first
+                if constexpr (kStats)
+                    for (uint32_t i = std::max(base, current.first + 1); i < std::min(base + L, count); ++i)
+                        stats->nodes_visited += !(kAnyHit && occluded[i]);
+                for (; entering; entering &= entering - 1) entering_rays[n++] = base + uint32_t(__builtin_ctz(entering));
+            }
+            for (uint32_t k = 0; k < n; ++k) {
+                const uint32_t i = entering_rays[k];
                 RayState& ray_state = state[i];
-                if (kAnyHit && occluded[i]) continue;
-                if (i != current.first) {
-                    if constexpr (kStats) stats->nodes_visited++;
-                    if (!enters_child(parent, current.slot, ray_state.org, ray_state.inv_dir, ray_state.tmin, ray_state.tmax,
-                                      frustum))
-                        continue;
-                }
                 const PackRay pack_ray(ray_state.shear);
                 Hit unused;
                 bool found = false;
@@ -219,6 +263,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     ray_state.tmax = -kInfinity;
                     if (--unsettled == 0) return;
                 }
+                soa.tmax[i] = ray_state.tmax;
             }
         }
         if (top == 0) return;
