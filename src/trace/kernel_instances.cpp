@@ -46,6 +46,9 @@ struct Policy {
         for (int i = 0; i < W; ++i) r.lane[i] = p[i];
         return r;
     }
+    static void store(float* p, const F& a) {
+        for (int i = 0; i < W; ++i) p[i] = a.lane[i];
+    }
     static F set1(float x) {
         F r;
         for (int i = 0; i < W; ++i) r.lane[i] = x;
@@ -76,6 +79,7 @@ struct SseOperations {
     static constexpr bool kScalarTriangles = false;
     using F = __m128;
     static F load(const float* p) { return _mm_load_ps(p); }
+    static void store(float* p, F a) { _mm_store_ps(p, a); }
     static F set1(float x) { return _mm_set1_ps(x); }
     static F sub(F a, F b) { return _mm_sub_ps(a, b); }
     static F mul(F a, F b) { return _mm_mul_ps(a, b); }
@@ -104,6 +108,7 @@ struct Avx2Operations {
     static constexpr bool kScalarTriangles = false;
     using F = __m256;
     static F load(const float* p) { return _mm256_load_ps(p); }
+    static void store(float* p, F a) { _mm256_store_ps(p, a); }
     static F set1(float x) { return _mm256_set1_ps(x); }
     static F sub(F a, F b) { return _mm256_sub_ps(a, b); }
     static F mul(F a, F b) { return _mm256_mul_ps(a, b); }

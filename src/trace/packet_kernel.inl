@@ -107,7 +107,7 @@ struct PacketRaysSoA {
 // their entry and exit planes), so it decides exactly as enters_child would.
 template <class S>
 [[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot, const PacketRaysSoA& rays,
-                                                           uint32_t base, const PacketFrustum& frustum) {
+                                                           uint32_t base, const PacketFrustum& frustum, float* entry = nullptr) {
     using F = typename S::F;
     F near = S::load(rays.tmin + base), far = S::load(rays.tmax + base);
     for (int axis = 0; axis < 3; ++axis) {
@@ -118,6 +118,7 @@ template <class S>
         far = S::min(t_exit, far);
     }
     const F tmax = S::load(rays.tmax + base);
+    if (entry) S::store(entry, near);
     return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
 }
 
@@ -193,23 +194,39 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             uint32_t first_ray[W];
             unsigned assigned = 0;
             unsigned remaining = (1u << W) - 1;
-            for (uint32_t i = current.first; i < count && remaining; ++i) {
-                if (i == current.first + 1) {
-                    // The first active ray missed some children: the packet's frustum culls most of them.
-                    remaining &= frustum_mask<S>(node, frustum);
-                    if (!remaining) break;
-                }
+            {
+                // The first active ray tests all children at once.
+                const uint32_t i = current.first;
                 const PacketRay<S> ray{state[i].org, state[i].inv_dir, frustum.entry_plane, frustum.exit_plane};
                 alignas(32) float entry[W];
                 alignas(32) uint32_t slot[W];
                 const int entered = enter_children<S>(node, ray, state[i].tmin, state[i].tmax, entry, slot);
                 if constexpr (kStats) stats->nodes_visited += valid_children;
                 for (int k = 0; k < entered; ++k) {
-                    if (!((remaining >> slot[k]) & 1)) continue;
                     first_ray[slot[k]] = i;
                     first_entry[slot[k]] = entry[k];
                     assigned |= 1u << slot[k];
                     remaining &= ~(1u << slot[k]);
+                }
+            }
+            // It missed some children: the packet's frustum culls most of them; each of the rest looks
+            // for its first ray among the later ones, S::kLanes rays at a time.
+            if (remaining) remaining &= frustum_mask<S>(node, frustum);
+            for (; remaining; remaining &= remaining - 1) {
+                const uint32_t child_slot = uint32_t(__builtin_ctz(remaining));
+                for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
+                    alignas(64) float entry[L];
+                    unsigned entering = rays_entering_child<S>(node, child_slot, soa, base, frustum, entry);
+                    if (base <= current.first) entering &= ~((2u << (current.first - base)) - 1);  // rays after the first
+                    if constexpr (kStats)
+                        for (uint32_t i = std::max(base, current.first + 1); i < std::min(base + L, count); ++i)
+                            stats->nodes_visited += !(kAnyHit && occluded[i]);
+                    if (!entering) continue;
+                    const uint32_t lane = uint32_t(__builtin_ctz(entering));
+                    first_ray[child_slot] = base + lane;
+                    first_entry[child_slot] = entry[lane];
+                    assigned |= 1u << child_slot;
+                    break;
                 }
             }
             if (assigned) {

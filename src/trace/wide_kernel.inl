@@ -2,7 +2,7 @@
 // includes this file once per instruction set, inside a namespace that defines the policies and under
 // `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.
 //
-// A policy S provides: kLanes (the node width W), the vector type F with load/set1/sub/mul/min/max,
+// A policy S provides: kLanes (the node width W), the vector type F with load/store/set1/sub/mul/min/max,
 // hit_mask(near, limit) (bit i: near[i] <= limit[i]), collect(mask, near, entry, slot) (writes the
 // entry distances and slots of the hit children in slot order, returns their number), and
 // kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
