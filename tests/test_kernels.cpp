@@ -312,3 +312,53 @@ TEST(Kernels, LeafPackerCoversEveryLeafAndSharesPacks) {
         EXPECT_LT(packs.size(), packs_one_per_leaf * 9 / 10) << builder << ": packs are not shared";
     }
 }
+
+// Packets test a leaf's triangles over eight rays at once when all rays of the packet shear along the
+// same axes (the dominant direction component), else ray by ray. Both must give exactly the answers
+// of the single-ray kernel: a fan of rays from one origin whose dominant axis is x for some rays and y
+// for others (same direction signs, so the packet stays coherent), next to a fan whose rays all have
+// x dominant; closest hits compared field by field, occlusion answers, and the arbiter.
+TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
+    const Scene& scene = cached_builtin_scene("interior");
+    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    const AABB box = scene.bounds();
+    const Vec3 origin = box.lo + (box.hi - box.lo) * 0.3f;
+    for (const float spread : {0.05f, 0.6f}) {  // 0.6: y overtakes x for part of the fan
+        std::vector<Ray> rays;
+        for (int i = 0; i < 256; ++i) {
+            Ray ray;
+            ray.org = origin;
+            ray.dir = {1.0f, 0.7f + spread * float(i % 16) / 15.0f, 0.2f + 0.3f * float(i / 16) / 15.0f};
+            rays.push_back(ray);
+        }
+        const std::unique_ptr<Tracer> single = make_tracer("bvh8", scene, bvh);
+        std::vector<Hit> expected(rays.size());
+        single->intersect(rays, expected);
+        std::vector<uint8_t> expected_occluded(rays.size());
+        single->occluded(rays, expected_occluded);
+        for (uint32_t size : {8u, 64u, 256u}) {
+            for (NodeTest test : supported_node_tests(8)) {
+                if (test == NodeTest::sse) continue;
+                SCOPED_TRACE("spread " + std::to_string(spread) + ", " + std::to_string(size) + " rays per packet, " +
+                             to_string(test));
+                const PacketTracer tracer(scene, bvh, size, test);
+                std::vector<Hit> hits(rays.size());
+                tracer.intersect(rays, hits);
+                std::vector<uint8_t> occluded(rays.size());
+                tracer.occluded(rays, occluded);
+                size_t hit_count = 0;
+                for (size_t i = 0; i < rays.size(); ++i) {
+                    EXPECT_EQ(hits[i].t, expected[i].t) << i;
+                    EXPECT_EQ(hits[i].primitive, expected[i].primitive) << i;
+                    EXPECT_EQ(hits[i].u, expected[i].u) << i;
+                    EXPECT_EQ(occluded[i], expected_occluded[i]) << i;
+                    EXPECT_TRUE(hits_agree(closest_records(tracer, std::span(&rays[i], 1))[0],
+                                           arbiter_closest_hit(scene, rays[i]), rays[i], scene.diagonal()))
+                        << i;
+                    hit_count += hits[i].is_hit();
+                }
+                EXPECT_GT(hit_count, rays.size() / 2);
+            }
+        }
+    }
+}

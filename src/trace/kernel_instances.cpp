@@ -58,6 +58,13 @@ struct Policy {
     static F mul(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x * y; }); }
     static F max(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x > y ? x : y; }); }
     static F min(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x < y ? x : y; }); }
+    static F add(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x + y; }); }
+    static F abs(const F& a) { return apply(a, a, [](float x, float) { return std::fabs(x); }); }
+    static unsigned less_mask(const F& a, const F& b) {
+        unsigned mask = 0;
+        for (int i = 0; i < W; ++i) mask |= unsigned(a.lane[i] < b.lane[i]) << i;
+        return mask;
+    }
     static unsigned hit_mask(const F& near, const F& limit) {
         unsigned mask = 0;
         for (int i = 0; i < W; ++i) mask |= unsigned(near.lane[i] <= limit.lane[i]) << i;
@@ -85,6 +92,9 @@ struct SseOperations {
     static F mul(F a, F b) { return _mm_mul_ps(a, b); }
     static F max(F a, F b) { return _mm_max_ps(a, b); }
     static F min(F a, F b) { return _mm_min_ps(a, b); }
+    static F add(F a, F b) { return _mm_add_ps(a, b); }
+    static F abs(F a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+    static unsigned less_mask(F a, F b) { return unsigned(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm_movemask_ps(_mm_cmple_ps(near, limit))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
         alignas(16) float lanes[4];
@@ -114,6 +124,9 @@ struct Avx2Operations {
     static F mul(F a, F b) { return _mm256_mul_ps(a, b); }
     static F max(F a, F b) { return _mm256_max_ps(a, b); }
     static F min(F a, F b) { return _mm256_min_ps(a, b); }
+    static F add(F a, F b) { return _mm256_add_ps(a, b); }
+    static F abs(F a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+    static unsigned less_mask(F a, F b) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
         alignas(32) float lanes[8];

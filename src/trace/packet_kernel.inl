@@ -100,7 +100,47 @@ struct PacketRaysSoA {
     alignas(64) float inv_dir[3][kMaxPacket];
     alignas(64) float tmin[kMaxPacket];
     alignas(64) float tmax[kMaxPacket];
+    alignas(64) float shear_x[kMaxPacket];  // WatertightRay's, for the triangle test over rays
+    alignas(64) float shear_y[kMaxPacket];
 };
+
+// The edge functions of one triangle (a lane of a TrianglePack) for S::kLanes rays that share the
+// shear's axes kx, ky, kz: pack_edges with the roles of rays and triangles swapped, lane by lane the
+// same float operations, so each lane decides exactly as the single-ray test would.
+template <class S>
+[[gnu::always_inline]] inline void edges_over_rays(const TrianglePack& pack, int lane, const PacketRaysSoA& rays, uint32_t base,
+                                                   int kx, int ky, int kz, float* u_out, float* v_out, float* w_out,
+                                                   unsigned& outside, unsigned& inside) {
+    using F = typename S::F;
+    const F org_x = S::load(rays.org[kx] + base), org_y = S::load(rays.org[ky] + base), org_z = S::load(rays.org[kz] + base);
+    const F shear_x = S::load(rays.shear_x + base), shear_y = S::load(rays.shear_y + base);
+    F sheared_x[3], sheared_y[3], magnitude = S::set1(0.0f), size = S::set1(0.0f);
+    for (int k = 0; k < 3; ++k) {
+        const F px = S::sub(S::set1(pack.vertex[k][kx][lane]), org_x);
+        const F py = S::sub(S::set1(pack.vertex[k][ky][lane]), org_y);
+        const F pz = S::sub(S::set1(pack.vertex[k][kz][lane]), org_z);
+        const F shift_x = S::mul(shear_x, pz), shift_y = S::mul(shear_y, pz);
+        sheared_x[k] = S::sub(px, shift_x);
+        sheared_y[k] = S::sub(py, shift_y);
+        const F vertex_magnitude = S::max(S::add(S::abs(px), S::abs(shift_x)), S::add(S::abs(py), S::abs(shift_y)));
+        magnitude = S::max(magnitude, vertex_magnitude);
+        size = S::max(size, S::max(S::abs(sheared_x[k]), S::abs(sheared_y[k])));
+    }
+    const F ax = sheared_x[0], ay = sheared_y[0], bx = sheared_x[1], by = sheared_y[1], cx = sheared_x[2], cy = sheared_y[2];
+    const F u = S::sub(S::mul(cx, by), S::mul(cy, bx));
+    const F v = S::sub(S::mul(ax, cy), S::mul(ay, cx));
+    const F w = S::sub(S::mul(bx, ay), S::mul(by, ax));
+    const F bound = S::add(S::mul(S::mul(S::set1(32.0f * 0x1p-24f), magnitude), size), S::set1(kUnderflowBound));
+    const F negative_bound = S::sub(S::set1(0.0f), bound);
+    const unsigned u_below = S::less_mask(u, negative_bound), v_below = S::less_mask(v, negative_bound),
+                   w_below = S::less_mask(w, negative_bound);
+    const unsigned u_above = S::less_mask(bound, u), v_above = S::less_mask(bound, v), w_above = S::less_mask(bound, w);
+    outside = (u_below | v_below | w_below) & (u_above | v_above | w_above);
+    inside = (u_above & v_above & w_above) | (u_below & v_below & w_below);
+    S::store(u_out, u);
+    S::store(v_out, v);
+    S::store(w_out, w);
+}
 
 // Bit j set when ray base + j enters child `slot` of `node` within its [tmin, tmax]: enters_child for
 // S::kLanes rays, lane by lane the same operations in the same order (the rays of a packet share
@@ -165,6 +205,8 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         state[i].tmin = soa.tmin[i] = rays[i].tmin;
         state[i].tmax = soa.tmax[i] = rays[i].tmax;
         state[i].shear = WatertightRay(rays[i]);
+        soa.shear_x[i] = state[i].shear.shear_x;
+        soa.shear_y[i] = state[i].shear.shear_y;
         if constexpr (kAnyHit) occluded[i] = 0;
         else hits[i] = Hit{};
     }
@@ -173,7 +215,12 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         for (int axis = 0; axis < 3; ++axis) soa.org[axis][i] = soa.inv_dir[axis][i] = 0.0f;
         soa.tmin[i] = kInfinity;
         soa.tmax[i] = -kInfinity;
+        soa.shear_x[i] = soa.shear_y[i] = 0.0f;
     }
+    // Triangles are tested over rays only when every ray shears along the same axes.
+    bool same_shear_axes = true;
+    for (uint32_t i = 1; i < count; ++i) same_shear_axes &= state[i].shear.kz == state[0].shear.kz;
+    const int kx = state[0].shear.kx, ky = state[0].shear.ky, kz = state[0].shear.kz;
     uint32_t unsettled = count;
 
     // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
@@ -255,9 +302,9 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             const WideNode<W>& parent = layout.nodes[current.parent];
             // The rays that enter the leaf: the box test only reads each ray's own tmax, which only
             // its own triangle tests change, so all of them can be found before any is tested.
-            uint32_t entering_rays[kMaxPacket];
-            uint32_t n = 0;
-            if (!(kAnyHit && occluded[current.first])) entering_rays[n++] = current.first;
+            unsigned entering_chunk[kMaxPacket / L];  // bit j of chunk c: ray c * L + j enters the leaf
+            for (uint32_t c = 0; c * L < count; ++c) entering_chunk[c] = 0;
+            if (!(kAnyHit && occluded[current.first])) entering_chunk[current.first / L] = 1u << (current.first % L);
             for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
                 // Settled occlusion rays have tmax = -inf: they enter nothing.
                 unsigned entering = rays_entering_child<S>(parent, current.slot, soa, base, frustum);
@@ -265,22 +312,64 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 if constexpr (kStats)
                     for (uint32_t i = std::max(base, current.first + 1); i < std::min(base + L, count); ++i)
                         stats->nodes_visited += !(kAnyHit && occluded[i]);
-                for (; entering; entering &= entering - 1) entering_rays[n++] = base + uint32_t(__builtin_ctz(entering));
+                entering_chunk[base / L] |= entering;
             }
-            for (uint32_t k = 0; k < n; ++k) {
-                const uint32_t i = entering_rays[k];
-                RayState& ray_state = state[i];
-                const PackRay pack_ray(ray_state.shear);
-                Hit unused;
-                bool found = false;
-                test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], ray_state.shear, pack_ray,
-                                              ray_state.tmax, kAnyHit ? unused : hits[i], found, stats);
-                if (kAnyHit && found) {
-                    occluded[i] = 1;
-                    ray_state.tmax = -kInfinity;
-                    if (--unsettled == 0) return;
+            // Each ray meets the leaf's triangles in lane order with its own tmax, whichever way they
+            // are tested, so both ways give the same answers.
+            for (uint32_t base = current.first / L * L; base < count; base += L) {
+                unsigned entering = entering_chunk[base / L];
+                if (!S::kScalarTriangles && same_shear_axes && 2 * uint32_t(__builtin_popcount(entering)) >= L) {
+                    // Most of these rays enter: one triangle against L rays at a time.
+                    for (uint32_t lane_index = 0; lane_index < current.count && entering; ++lane_index) {
+                        const TrianglePack& pack = layout.packs[current.child + lane_index / 4];
+                        const int lane = int(lane_index % 4);
+                        if constexpr (kStats)
+                            if (lane == 0)
+                                stats->triangles_tested += uint64_t(__builtin_popcount(entering)) * std::min(4u, current.count - lane_index);
+                        alignas(64) float u[L], v[L], w[L];
+                        unsigned outside, inside;
+                        edges_over_rays<S>(pack, lane, soa, base, kx, ky, kz, u, v, w, outside, inside);
+                        unsigned candidates = entering & ~outside;
+                        if (!candidates) continue;
+                        Vec3 vertex[3];
+                        pack_triangle(pack, lane, vertex);
+                        for (; candidates; candidates &= candidates - 1) {
+                            const uint32_t j = uint32_t(__builtin_ctz(candidates));
+                            const uint32_t i = base + j;
+                            TriangleHit candidate;
+                            const bool crossed =
+                                (inside >> j) & 1
+                                    ? finish_crossing(rays[i], vertex[0], vertex[1], vertex[2], state[i].tmax, u[j], v[j], w[j], candidate)
+                                    : decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], state[i].tmax, u[j], v[j], w[j], candidate);
+                            if (!crossed) continue;
+                            if constexpr (kAnyHit) {
+                                occluded[i] = 1;
+                                state[i].tmax = soa.tmax[i] = -kInfinity;
+                                entering &= ~(1u << j);
+                                if (--unsettled == 0) return;
+                            } else {
+                                state[i].tmax = soa.tmax[i] = candidate.t;
+                                hits[i] = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+                            }
+                        }
+                    }
+                    continue;
                 }
-                soa.tmax[i] = ray_state.tmax;
+                for (; entering; entering &= entering - 1) {
+                    const uint32_t i = base + uint32_t(__builtin_ctz(entering));
+                    RayState& ray_state = state[i];
+                    const PackRay pack_ray(ray_state.shear);
+                    Hit unused;
+                    bool found = false;
+                    test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], ray_state.shear, pack_ray,
+                                                  ray_state.tmax, kAnyHit ? unused : hits[i], found, stats);
+                    if (kAnyHit && found) {
+                        occluded[i] = 1;
+                        ray_state.tmax = -kInfinity;
+                        if (--unsettled == 0) return;
+                    }
+                    soa.tmax[i] = ray_state.tmax;
+                }
             }
         }
         if (top == 0) return;
