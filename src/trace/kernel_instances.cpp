@@ -59,6 +59,7 @@ struct Policy {
     static F max(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x > y ? x : y; }); }
     static F min(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x < y ? x : y; }); }
     static F add(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x + y; }); }
+    static F div(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x / y; }); }
     static F abs(const F& a) { return apply(a, a, [](float x, float) { return std::fabs(x); }); }
     static unsigned less_mask(const F& a, const F& b) {
         unsigned mask = 0;
@@ -93,6 +94,7 @@ struct SseOperations {
     static F max(F a, F b) { return _mm_max_ps(a, b); }
     static F min(F a, F b) { return _mm_min_ps(a, b); }
     static F add(F a, F b) { return _mm_add_ps(a, b); }
+    static F div(F a, F b) { return _mm_div_ps(a, b); }
     static F abs(F a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
     static unsigned less_mask(F a, F b) { return unsigned(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm_movemask_ps(_mm_cmple_ps(near, limit))); }
@@ -125,6 +127,7 @@ struct Avx2Operations {
     static F max(F a, F b) { return _mm256_max_ps(a, b); }
     static F min(F a, F b) { return _mm256_min_ps(a, b); }
     static F add(F a, F b) { return _mm256_add_ps(a, b); }
+    static F div(F a, F b) { return _mm256_div_ps(a, b); }
     static F abs(F a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
     static unsigned less_mask(F a, F b) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ))); }

@@ -18,16 +18,17 @@ struct PacketFrustum {
 };
 
 // False when the rays do not all share the sign of each direction component (or one is zero): the
-// entry and exit planes then differ between rays and the packet goes ray by ray.
-inline bool make_frustum(const Ray* rays, uint32_t count, PacketFrustum& frustum) {
+// entry and exit planes then differ between rays and the packet goes ray by ray. `inv_dir[axis][i]`
+// holds 1 / rays[i].dir[axis].
+inline bool make_frustum(const Ray* rays, const float (*inv_dir)[kMaxPacket], uint32_t count, PacketFrustum& frustum) {
     for (int axis = 0; axis < 3; ++axis) {
         const bool negative = rays[0].dir[axis] < 0.0f;
         frustum.org_lo[axis] = frustum.org_hi[axis] = rays[0].org[axis];
-        frustum.inv_lo[axis] = frustum.inv_hi[axis] = 1.0f / rays[0].dir[axis];
+        frustum.inv_lo[axis] = frustum.inv_hi[axis] = inv_dir[axis][0];
         for (uint32_t i = 0; i < count; ++i) {
             const float d = rays[i].dir[axis];
             if (d == 0.0f || (d < 0.0f) != negative) return false;
-            const float inv = 1.0f / d;
+            const float inv = inv_dir[axis][i];
             frustum.org_lo[axis] = std::min(frustum.org_lo[axis], rays[i].org[axis]);
             frustum.org_hi[axis] = std::max(frustum.org_hi[axis], rays[i].org[axis]);
             frustum.inv_lo[axis] = std::min(frustum.inv_lo[axis], inv);
@@ -178,8 +179,35 @@ template <class S, bool kAnyHit, bool kStats>
 void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
                   TraversalStats* stats) {
     constexpr int W = S::kLanes;
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    // The rays in structure-of-arrays form; entries from `count` up to the next multiple of L hold a
+    // ray that enters nothing (tmin = +inf, tmax = -inf). A ray whose occlusion is settled gets
+    // tmax = -inf: it enters no box again. Inverse directions and shears are divided L rays at a time
+    // (the same correctly rounded divisions as the single-ray kernel's).
+    PacketRaysSoA soa;
+    alignas(64) float dir[3][kMaxPacket];
+    for (uint32_t i = 0; i < count; ++i) {
+        for (int axis = 0; axis < 3; ++axis) {
+            soa.org[axis][i] = rays[i].org[axis];
+            dir[axis][i] = rays[i].dir[axis];
+        }
+        soa.tmin[i] = rays[i].tmin;
+        soa.tmax[i] = rays[i].tmax;
+    }
+    for (uint32_t i = count; i % L != 0; ++i) {
+        for (int axis = 0; axis < 3; ++axis) {
+            soa.org[axis][i] = 0.0f;
+            dir[axis][i] = 1.0f;
+        }
+        soa.tmin[i] = kInfinity;
+        soa.tmax[i] = -kInfinity;
+    }
+    for (uint32_t base = 0; base < count; base += L)
+        for (int axis = 0; axis < 3; ++axis)
+            S::store(soa.inv_dir[axis] + base, S::div(S::set1(1.0f), S::load(dir[axis] + base)));
+
     PacketFrustum frustum;
-    if (!make_frustum(rays, count, frustum)) {
+    if (!make_frustum(rays, soa.inv_dir, count, frustum)) {
         for (uint32_t i = 0; i < count; ++i) {
             Hit hit;
             const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
@@ -188,39 +216,32 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         }
         return;
     }
-
-    // Per-ray state. A ray whose occlusion is settled gets tmax = -inf: it enters no box again.
-    struct alignas(16) RayState {
-        float org[3], inv_dir[3];
-        float tmin, tmax;
-        WatertightRay shear;
-    };
-    RayState state[kMaxPacket];
-    PacketRaysSoA soa;
     for (uint32_t i = 0; i < count; ++i) {
-        for (int axis = 0; axis < 3; ++axis) {
-            state[i].org[axis] = soa.org[axis][i] = rays[i].org[axis];
-            state[i].inv_dir[axis] = soa.inv_dir[axis][i] = 1.0f / rays[i].dir[axis];
-        }
-        state[i].tmin = soa.tmin[i] = rays[i].tmin;
-        state[i].tmax = soa.tmax[i] = rays[i].tmax;
-        state[i].shear = WatertightRay(rays[i]);
-        soa.shear_x[i] = state[i].shear.shear_x;
-        soa.shear_y[i] = state[i].shear.shear_y;
         if constexpr (kAnyHit) occluded[i] = 0;
         else hits[i] = Hit{};
     }
-    constexpr uint32_t L = uint32_t(S::kLanes);
-    for (uint32_t i = count; i % L != 0; ++i) {
-        for (int axis = 0; axis < 3; ++axis) soa.org[axis][i] = soa.inv_dir[axis][i] = 0.0f;
-        soa.tmin[i] = kInfinity;
-        soa.tmax[i] = -kInfinity;
-        soa.shear_x[i] = soa.shear_y[i] = 0.0f;
-    }
-    // Triangles are tested over rays only when every ray shears along the same axes.
+
+    // The shear axes of the watertight triangle test (WatertightRay): when every ray of the packet
+    // shears along the same axes, leaves test triangles over rays with the shears kept in soa; the
+    // WatertightRay of a ray that tests a leaf on its own is made when it first does.
+    const WatertightRay first_shear(rays[0]);
+    const int kx = first_shear.kx, ky = first_shear.ky, kz = first_shear.kz;
     bool same_shear_axes = true;
-    for (uint32_t i = 1; i < count; ++i) same_shear_axes &= state[i].shear.kz == state[0].shear.kz;
-    const int kx = state[0].shear.kx, ky = state[0].shear.ky, kz = state[0].shear.kz;
+    for (uint32_t i = 1; i < count; ++i) same_shear_axes &= dominant_axis(rays[i].dir) == kz;
+    if (same_shear_axes) {
+        for (uint32_t base = 0; base < count; base += L) {
+            const typename S::F dir_z = S::load(dir[kz] + base);
+            S::store(soa.shear_x + base, S::div(S::load(dir[kx] + base), dir_z));
+            S::store(soa.shear_y + base, S::div(S::load(dir[ky] + base), dir_z));
+        }
+    }
+    union LazyShear {
+        WatertightRay shear;
+        LazyShear() {}  // left unmade: most packets never need most of them
+    };
+    LazyShear shears[kMaxPacket];
+    uint8_t sheared[kMaxPacket];
+    for (uint32_t i = 0; i < count; ++i) sheared[i] = 0;
     uint32_t unsettled = count;
 
     // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
@@ -244,10 +265,12 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             {
                 // The first active ray tests all children at once.
                 const uint32_t i = current.first;
-                const PacketRay<S> ray{state[i].org, state[i].inv_dir, frustum.entry_plane, frustum.exit_plane};
+                const float org[3] = {soa.org[0][i], soa.org[1][i], soa.org[2][i]};
+                const float inv_dir[3] = {soa.inv_dir[0][i], soa.inv_dir[1][i], soa.inv_dir[2][i]};
+                const PacketRay<S> ray{org, inv_dir, frustum.entry_plane, frustum.exit_plane};
                 alignas(32) float entry[W];
                 alignas(32) uint32_t slot[W];
-                const int entered = enter_children<S>(node, ray, state[i].tmin, state[i].tmax, entry, slot);
+                const int entered = enter_children<S>(node, ray, soa.tmin[i], soa.tmax[i], entry, slot);
                 if constexpr (kStats) stats->nodes_visited += valid_children;
                 for (int k = 0; k < entered; ++k) {
                     first_ray[slot[k]] = i;
@@ -339,16 +362,16 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                             TriangleHit candidate;
                             const bool crossed =
                                 (inside >> j) & 1
-                                    ? finish_crossing(rays[i], vertex[0], vertex[1], vertex[2], state[i].tmax, u[j], v[j], w[j], candidate)
-                                    : decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], state[i].tmax, u[j], v[j], w[j], candidate);
+                                    ? finish_crossing(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate)
+                                    : decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate);
                             if (!crossed) continue;
                             if constexpr (kAnyHit) {
                                 occluded[i] = 1;
-                                state[i].tmax = soa.tmax[i] = -kInfinity;
+                                soa.tmax[i] = -kInfinity;
                                 entering &= ~(1u << j);
                                 if (--unsettled == 0) return;
                             } else {
-                                state[i].tmax = soa.tmax[i] = candidate.t;
+                                soa.tmax[i] = candidate.t;
                                 hits[i] = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
                             }
                         }
@@ -357,18 +380,21 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 }
                 for (; entering; entering &= entering - 1) {
                     const uint32_t i = base + uint32_t(__builtin_ctz(entering));
-                    RayState& ray_state = state[i];
-                    const PackRay pack_ray(ray_state.shear);
+                    if (!sheared[i]) {
+                        new (&shears[i].shear) WatertightRay(rays[i]);
+                        sheared[i] = 1;
+                    }
+                    const WatertightRay& shear = shears[i].shear;
+                    const PackRay pack_ray(shear);
                     Hit unused;
                     bool found = false;
-                    test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], ray_state.shear, pack_ray,
-                                                  ray_state.tmax, kAnyHit ? unused : hits[i], found, stats);
+                    test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
+                                                  kAnyHit ? unused : hits[i], found, stats);
                     if (kAnyHit && found) {
                         occluded[i] = 1;
-                        ray_state.tmax = -kInfinity;
+                        soa.tmax[i] = -kInfinity;
                         if (--unsettled == 0) return;
                     }
-                    soa.tmax[i] = ray_state.tmax;
                 }
             }
         }

@@ -17,6 +17,12 @@ namespace spacebvh::trace {
 // intersect_watertight): far above the few 2^-150 roundings, far below any normal-range bound.
 inline constexpr float kUnderflowBound = 0x1p-140f;
 
+// The axis of the largest direction component (ties to the lower axis): the shear's kz.
+inline int dominant_axis(const Vec3& dir) {
+    const Vec3 a{std::fabs(dir.x), std::fabs(dir.y), std::fabs(dir.z)};
+    return (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+}
+
 // Per-ray constants of the shear that maps the ray direction onto +z.
 struct WatertightRay {
     Vec3 org;
@@ -25,8 +31,7 @@ struct WatertightRay {
 
     WatertightRay() = default;
     explicit WatertightRay(const Ray& ray) : org(ray.org) {
-        const Vec3 a{std::fabs(ray.dir.x), std::fabs(ray.dir.y), std::fabs(ray.dir.z)};
-        kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+        kz = dominant_axis(ray.dir);
         kx = (kz + 1) % 3;
         ky = (kx + 1) % 3;
         if (ray.dir[kz] < 0.0f) std::swap(kx, ky);  // keep the winding, so det's sign is meaningful
