@@ -5,9 +5,12 @@
 //     are known to miss and are never looked at again below it;
 //   - frustum culling: when the first active ray misses a child, an interval-arithmetic bound over the
 //     whole packet (all origins x all inverse directions) culls the child for every ray at once;
-//     only if that bound cannot rule it out are the later rays tested one by one;
+//     only if that bound cannot rule it out are the later rays tested, eight at a time;
+//   - at a leaf, the rays after the first test its box (eight at a time), and those that enter test
+//     its triangles: one triangle against eight rays when the packet's rays share their shear
+//     axes, else ray by ray;
 //   - packets whose rays do not share direction signs (coherence lost) fall back to single rays.
-// Ray-box and ray-triangle tests per ray are the single-ray kernel's (same answers, exactly).
+// Every ray-box and ray-triangle decision is lane by lane the single-ray kernel's (same answers, exactly).
 // Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
 
 // The interval bounds of a packet: every ray's origin and inverse direction lie in these boxes.
@@ -75,25 +78,7 @@ template <class S>
     return S::hit_mask(lower_widened, upper_widened);
 }
 
-// Whether one ray enters child `slot` of `node` within [tmin, tmax]: one lane of enter_children, with
-// the same operations in the same order (a NaN slab distance keeps the running bound; the exit
-// distance widened by kFarScale), so it never culls a child the ray's own node test would enter.
-template <int W>
-[[gnu::always_inline]] inline bool enters_child(const WideNode<W>& node, uint32_t slot, const float* org, const float* inv_dir,
-                                                float tmin, float tmax, const PacketFrustum& frustum) {
-    float near = tmin, far = tmax;
-    for (int axis = 0; axis < 3; ++axis) {
-        const float t_entry = (node.planes[frustum.entry_plane[axis]][slot] - org[axis]) * inv_dir[axis];
-        const float t_exit = (node.planes[frustum.exit_plane[axis]][slot] - org[axis]) * inv_dir[axis];
-        near = t_entry > near ? t_entry : near;
-        far = t_exit < far ? t_exit : far;
-    }
-    const float widened = far * kFarScale;
-    const float limit = widened < tmax ? widened : tmax;
-    return near <= limit;
-}
-
-// Rays packed structure-of-arrays, so the leaf box test below runs over S::kLanes rays at once.
+// The packet's rays in structure-of-arrays form, so the tests below run over S::kLanes rays at once.
 // Entries from `count` up to the next multiple of the lane count hold a ray that enters nothing
 // (tmin = +inf, tmax = -inf).
 struct PacketRaysSoA {
@@ -143,9 +128,10 @@ template <class S>
     S::store(w_out, w);
 }
 
-// Bit j set when ray base + j enters child `slot` of `node` within its [tmin, tmax]: enters_child for
-// S::kLanes rays, lane by lane the same operations in the same order (the rays of a packet share
-// their entry and exit planes), so it decides exactly as enters_child would.
+// Bit j set when ray base + j enters child `slot` of `node` within its [tmin, tmax]: for S::kLanes
+// rays, each lane the operations of that child's lane in enter_children, in the same order (a NaN slab
+// distance keeps the running bound; the exit distance widened by kFarScale; the rays of a packet share
+// their entry and exit planes), so it never disagrees with the ray's own node test.
 template <class S>
 [[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot, const PacketRaysSoA& rays,
                                                            uint32_t base, const PacketFrustum& frustum, float* entry = nullptr) {
