@@ -9,12 +9,19 @@
 
 namespace spacebvh::build {
 
+namespace {
+// The side of a binned object split: the reference's centroid bin against the cut.
+bool left_of_bin(const Reference& reference, const ObjectBinning& binning, int axis, uint32_t bin) {
+    return binning.bin_of(reference.centroid(axis)) < bin;
+}
+}  // namespace
+
 bool goes_left(const Reference& reference, const Split& split) {
     switch (split.kind) {
         case SplitKind::object_sorted:
             return CentroidOrder{split.axis}(reference, split.tie);
         case SplitKind::object_binned:
-            return split.binning.bin_of(reference.centroid(split.axis)) < split.bin;
+            return left_of_bin(reference, split.binning, split.axis, split.bin);
         case SplitKind::spatial:
             return reference.bounds.hi[split.axis] <= split.position;
         case SplitKind::grid:  // may clip: apply_grid_split
@@ -140,7 +147,7 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
         const int axis = split.axis;
         const uint32_t bin = split.bin;
         middle = std::partition(storage.begin(), storage.begin() + count,
-                                [&](const Reference& reference) { return binning.bin_of(reference.centroid(axis)) < bin; });
+                                [&](const Reference& reference) { return left_of_bin(reference, binning, axis, bin); });
     } else {
         middle = std::partition(storage.begin(), storage.begin() + count,
                                 [&](const Reference& reference) { return goes_left(reference, split); });

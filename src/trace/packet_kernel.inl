@@ -149,6 +149,25 @@ template <class S>
     return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
 }
 
+// rays_entering_child for rays base .. base + S::kLanes - 1, keeping only those after the packet's
+// first active ray `first` (rays before it are known to miss; the first is handled on its own).
+// Settled occlusion rays have tmax = -inf: they enter nothing. Counts one box test per unsettled
+// ray considered.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline unsigned later_rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot,
+                                                                 const PacketRaysSoA& rays, uint32_t base, uint32_t first,
+                                                                 uint32_t count, const uint8_t* occluded,
+                                                                 const PacketFrustum& frustum, TraversalStats* stats,
+                                                                 float* entry = nullptr) {
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    unsigned entering = rays_entering_child<S>(node, slot, rays, base, frustum, entry);
+    if (base <= first) entering &= ~((2u << (first - base)) - 1);
+    if constexpr (kStats)
+        for (uint32_t i = std::max(base, first + 1); i < std::min(base + L, count); ++i)
+            stats->nodes_visited += !(kAnyHit && occluded[i]);
+    return entering;
+}
+
 // One ray of a packet as enter_children sees it: its origin and inverse direction broadcast on demand
 // (cheap loads) instead of kept in registers per ray.
 template <class S>
@@ -272,11 +291,8 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 const uint32_t child_slot = uint32_t(__builtin_ctz(remaining));
                 for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
                     alignas(64) float entry[L];
-                    unsigned entering = rays_entering_child<S>(node, child_slot, soa, base, frustum, entry);
-                    if (base <= current.first) entering &= ~((2u << (current.first - base)) - 1);  // rays after the first
-                    if constexpr (kStats)
-                        for (uint32_t i = std::max(base, current.first + 1); i < std::min(base + L, count); ++i)
-                            stats->nodes_visited += !(kAnyHit && occluded[i]);
+                    const unsigned entering = later_rays_entering_child<S, kAnyHit, kStats>(
+                        node, child_slot, soa, base, current.first, count, occluded, frustum, stats, entry);
                     if (!entering) continue;
                     const uint32_t lane = uint32_t(__builtin_ctz(entering));
                     first_ray[child_slot] = base + lane;
@@ -315,13 +331,8 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             for (uint32_t c = 0; c * L < count; ++c) entering_chunk[c] = 0;
             if (!(kAnyHit && occluded[current.first])) entering_chunk[current.first / L] = 1u << (current.first % L);
             for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
-                // Settled occlusion rays have tmax = -inf: they enter nothing.
-                unsigned entering = rays_entering_child<S>(parent, current.slot, soa, base, frustum);
-                if (base <= current.first) entering &= ~((2u << (current.first - base)) - 1);  // rays after the first
-                if constexpr (kStats)
-                    for (uint32_t i = std::max(base, current.first + 1); i < std::min(base + L, count); ++i)
-                        stats->nodes_visited += !(kAnyHit && occluded[i]);
-                entering_chunk[base / L] |= entering;
+                entering_chunk[base / L] |= later_rays_entering_child<S, kAnyHit, kStats>(
+                    parent, current.slot, soa, base, current.first, count, occluded, frustum, stats);
             }
             // Each ray meets the leaf's triangles in lane order with its own tmax, whichever way they
             // are tested, so both ways give the same answers.

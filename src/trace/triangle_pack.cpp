@@ -19,7 +19,8 @@ void LeafPacker::put(uint32_t primitive) {
 }
 
 std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
-    std::vector<uint32_t> triangles;
+    std::vector<uint32_t>& triangles = triangles_;
+    triangles.clear();
     for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
         if (!scene_.triangles[bvh_.primitives[i]].is_degenerate()) triangles.push_back(bvh_.primitives[i]);
     if (triangles.empty()) return {0, 0};
@@ -27,12 +28,13 @@ std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
     if (open_lanes_ < 4) {
         const uint32_t* open_begin = packs_.back().primitive;
         const uint32_t* open_end = open_begin + open_lanes_;
-        std::vector<uint32_t> fresh;
-        for (uint32_t primitive : triangles)
-            if (std::find(open_begin, open_end, primitive) == open_end) fresh.push_back(primitive);
-        if (open_lanes_ + fresh.size() <= 4) {
-            for (uint32_t primitive : fresh) put(primitive);
-            return {uint32_t(packs_.size() - 1), open_lanes_};
+        const auto stored = [&](uint32_t primitive) { return std::find(open_begin, open_end, primitive) != open_end; };
+        const size_t fresh = size_t(std::count_if(triangles.begin(), triangles.end(), [&](uint32_t p) { return !stored(p); }));
+        if (open_lanes_ + fresh <= 4) {
+            const uint32_t pack = uint32_t(packs_.size() - 1);
+            for (uint32_t primitive : triangles)
+                if (!stored(primitive)) put(primitive);
+            return {pack, open_lanes_};
         }
     }
     open_lanes_ = 4;  // start a new pack

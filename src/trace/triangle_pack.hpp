@@ -52,6 +52,7 @@ private:
     const Bvh& bvh_;
     TrianglePacks& packs_;
     uint32_t open_lanes_ = 4;  // lanes filled in packs_.back(); 4 = no room left
+    std::vector<uint32_t> triangles_;  // scratch of add()
 };
 
 // Per-ray constants of the four-wide watertight triangle test (the shear of WatertightRay, broadcast).
