@@ -262,20 +262,10 @@ std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
     return text;
 }
 
-class TracerWithBuilder : public ::testing::TestWithParam<std::string> {};
-
-}  // namespace
-
-// ---------------------------------------------------------------------------------------------------
-// Watertightness.
-
-// No ray from inside the closed builtin `organic` mesh slips through at a vertex or along an edge.
-TEST_P(TracerWithBuilder, OrganicMeshIsWatertight) {
-    const Scene scene = load_scene("builtin:organic");
-    // Rebuild the shared vertices and edges from the triangle soup (the mesh is welded bit-exactly).
+// Rebuilds the shared vertices and faces of the welded triangle soup of builtin:organic (moved by
+// `offset`; equal vertices stay equal) and checks that it is closed.
+void organic_mesh(const Scene& scene, std::vector<Vec3>& vertices, std::vector<std::array<uint32_t, 3>>& faces) {
     std::map<std::tuple<uint32_t, uint32_t, uint32_t>, uint32_t> index;
-    std::vector<Vec3> vertices;
-    std::vector<std::array<uint32_t, 3>> faces;
     auto id = [&](Vec3 v) {
         uint32_t bits[3];
         std::memcpy(bits, &v, sizeof bits);
@@ -288,6 +278,21 @@ TEST_P(TracerWithBuilder, OrganicMeshIsWatertight) {
     for (const Triangle& t : scene.triangles) faces.push_back({id(t.v0), id(t.v1), id(t.v2)});
     // A closed genus-0 triangle mesh has V - E + F = 2, i.e. V = F / 2 + 2.
     ASSERT_EQ(vertices.size(), faces.size() / 2 + 2) << "organic is not a closed, welded mesh";
+}
+
+class TracerWithBuilder : public ::testing::TestWithParam<std::string> {};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------
+// Watertightness.
+
+// No ray from inside the closed builtin `organic` mesh slips through at a vertex or along an edge.
+TEST_P(TracerWithBuilder, OrganicMeshIsWatertight) {
+    const Scene scene = load_scene("builtin:organic");
+    std::vector<Vec3> vertices;
+    std::vector<std::array<uint32_t, 3>> faces;
+    organic_mesh(scene, vertices, faces);
 
     const Bvh bvh = build_with(scene, GetParam());
     const std::vector<Vec3> inside = {{0, 0, 0}, {0.5f, -0.3f, 0.2f}, {-1.0f, 0.7f, -0.4f}, {0.3f, 1.1f, 0.9f}};
@@ -296,6 +301,22 @@ TEST_P(TracerWithBuilder, OrganicMeshIsWatertight) {
         EXPECT_EQ(rays_escaping(vertices, faces, inside, *make_tracer(kernel, scene, bvh), &rays), "") << kernel;
         EXPECT_GT(rays, 450000u);
     }
+}
+
+// The same far from the world's origin (about 1000 times the mesh's size away): a ray's origin times
+// its inverse direction is then far larger than the distances to the boxes it enters, the case the
+// single-ray kernels' fused box test widens its offsets for (wide_kernel.inl, RayBoxes).
+TEST(Tracer, OrganicMeshFarFromTheOriginIsWatertight) {
+    SceneTransform transform;
+    transform.translate = {2500.0f, -1700.0f, 900.0f};
+    const Scene scene = load_scene("builtin:organic", transform);
+    std::vector<Vec3> vertices;
+    std::vector<std::array<uint32_t, 3>> faces;
+    organic_mesh(scene, vertices, faces);
+    const Bvh bvh = build_with(scene, "spatial");
+    const std::vector<Vec3> inside = {transform.translate, transform.translate + Vec3(0.5f, -0.3f, 0.2f)};
+    for (const std::string& kernel : distinct_kernels())
+        EXPECT_EQ(rays_escaping(vertices, faces, inside, *make_tracer(kernel, scene, bvh)), "") << kernel;
 }
 
 // The same on hand-made closed meshes: a bumpy rotated icosphere, axis-aligned and rotated grid cubes

@@ -6,6 +6,7 @@
 #include <immintrin.h>
 
 #include <cmath>
+#include <limits>
 
 #include "trace/kernels.hpp"
 #include "trace/traversal_common.hpp"
@@ -61,6 +62,11 @@ struct Policy {
     static F add(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x + y; }); }
     static F div(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x / y; }); }
     static F abs(const F& a) { return apply(a, a, [](float x, float) { return std::fabs(x); }); }
+    static F fmsub(const F& a, const F& b, const F& c) {
+        F r;
+        for (int i = 0; i < W; ++i) r.lane[i] = std::fma(a.lane[i], b.lane[i], -c.lane[i]);
+        return r;
+    }
     static unsigned less_mask(const F& a, const F& b) {
         unsigned mask = 0;
         for (int i = 0; i < W; ++i) mask |= unsigned(a.lane[i] < b.lane[i]) << i;
@@ -96,6 +102,19 @@ struct SseOperations {
     static F add(F a, F b) { return _mm_add_ps(a, b); }
     static F div(F a, F b) { return _mm_div_ps(a, b); }
     static F abs(F a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+    // a * b - c rounded once (the fused box test of wide_kernel.inl relies on the single rounding).
+    static F fmsub(F a, F b, F c) {
+#ifdef __FMA__
+        return _mm_fmsub_ps(a, b, c);
+#else
+        alignas(16) float x[4], y[4], z[4];
+        _mm_store_ps(x, a);
+        _mm_store_ps(y, b);
+        _mm_store_ps(z, c);
+        for (int i = 0; i < 4; ++i) x[i] = std::fma(x[i], y[i], -z[i]);
+        return _mm_load_ps(x);
+#endif
+    }
     static unsigned less_mask(F a, F b) { return unsigned(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm_movemask_ps(_mm_cmple_ps(near, limit))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
@@ -114,7 +133,7 @@ struct Policy : SseOperations {};
 }  // namespace sse_kernels
 
 #pragma GCC push_options
-#pragma GCC target("avx2")
+#pragma GCC target("avx2,fma")
 struct Avx2Operations {
     static constexpr int kLanes = 8;
     static constexpr bool kScalarTriangles = false;
@@ -129,6 +148,7 @@ struct Avx2Operations {
     static F add(F a, F b) { return _mm256_add_ps(a, b); }
     static F div(F a, F b) { return _mm256_div_ps(a, b); }
     static F abs(F a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
+    static F fmsub(F a, F b, F c) { return _mm256_fmsub_ps(a, b, c); }
     static unsigned less_mask(F a, F b) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
@@ -148,7 +168,7 @@ struct Policy : Avx2Operations {};
 #pragma GCC pop_options
 
 #pragma GCC push_options
-#pragma GCC target("avx2,avx512f,avx512vl")
+#pragma GCC target("avx2,fma,avx512f,avx512vl")
 // AVX-512VL: compares straight into mask registers, and the hit children compressed into slot order
 // in registers (a compress to memory is microcoded and slow on some CPUs).
 namespace avx512_kernels {
@@ -158,6 +178,7 @@ struct Policy;
 template <>
 struct Policy<4> : SseOperations {
     static unsigned hit_mask(__m128 near, __m128 limit) { return _mm_cmp_ps_mask(near, limit, _CMP_LE_OQ); }
+    static __m128 fmsub(__m128 a, __m128 b, __m128 c) { return _mm_fmsub_ps(a, b, c); }
     static int collect(unsigned mask, __m128 near, float* entry, uint32_t* slot) {
         _mm_storeu_ps(entry, _mm_maskz_compress_ps(__mmask8(mask), near));
         _mm_storeu_si128(reinterpret_cast<__m128i*>(slot), _mm_maskz_compress_epi32(__mmask8(mask), _mm_setr_epi32(0, 1, 2, 3)));
@@ -185,8 +206,9 @@ bool cpu_has(NodeTest test) {
     switch (test) {
         case NodeTest::scalar:
         case NodeTest::sse: return true;
-        case NodeTest::avx2: return __builtin_cpu_supports("avx2");
-        case NodeTest::avx512: return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+        case NodeTest::avx2: return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+        case NodeTest::avx512:
+            return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("fma");
         case NodeTest::best: return true;
     }
     return false;

@@ -1,39 +1,86 @@
-// The single-ray kernels of wide BVHs, written once over a node-test policy `S`. wide_tracer.cpp
+// The single-ray kernels of wide BVHs, written once over a node-test policy `S`. kernel_instances.cpp
 // includes this file once per instruction set, inside a namespace that defines the policies and under
 // `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.
 //
-// A policy S provides: kLanes (the node width W), the vector type F with load/store/set1/sub/mul/min/max,
-// hit_mask(near, limit) (bit i: near[i] <= limit[i]), collect(mask, near, entry, slot) (writes the
+// A policy S provides: kLanes (the node width W), the vector type F with load/store/set1/sub/mul/min/max
+// and fmsub (a * b - c, rounded once), hit_mask(near, limit) (bit i: near[i] <= limit[i]), collect(mask, near, entry, slot) (writes the
 // entry distances and slots of the hit children in slot order, returns their number), and
 // kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
 // No lambdas here: they would not inherit the target of the pragma region.
 
-// Per-ray constants of the box test: for each axis, which plane of a node's SoA boxes the ray enters
-// through (the lower one for a positive direction) and which it leaves through.
+// Per-ray constants of the single-ray box test (fused form, as Embree's): per axis an entry and an
+// exit scale (about 1/d) and offset (about o/d), and which plane of a node's SoA boxes the ray enters
+// through (the lower one for a positive direction) and which it leaves through. A slab distance is
+// then one fused multiply-subtract, plane * scale - offset, instead of (plane - o) * (1/d) in two
+// dependent steps, and the exit distances need no widening afterwards: a shorter chain per node.
+//
+// Why no box a ray enters within [tmin, tmax] is culled (u = 2^-24; t = (p - o) / d exact; t >= 0, as
+// the spec's rays have tmin >= 0).
+// Entry: r = (1/d)(1 + e_r), q = o r (1 + e_q), so p r - q = t (1 + e_r) - o r e_q: an error relative to
+// t plus an absolute one up to |q| u (1 + 2u), which can dwarf t (a box near a ray's origin far from the
+// world's origin). The entry offset is q raised past that (slack |q| 2^-21, ample for the rounding of
+// the sum), so the fused result is at most t (1 + u)^2.
+// Exit: scale R = fl(r s) with s = 1 + 2^-21, so p R = K (t + o/d) and o R = K o/d with one constant
+// K in [s (1 - u)^2, s (1 + u)^2]; the exit offset is fl(o R) lowered past its rounding, so
+// p R - offset >= K t and the fused result is at least s (1 - u)^3 t >= (1 + u)^2 t, no less than any
+// entry distance of the same box: the widening of Ize ("Robust BVH Ray Traversal", JCGT 2013) folded
+// into the constants. Both slacks add 2^-140 for values in the subnormal range.
+// Answers cannot change (the exact triangle test decides them); at most a few more boxes are entered.
+// An axis along which the ray does not move (d = 0, or a scale or offset not finite) gets scale 0 and
+// offsets +-inf, i.e. NaN or -+inf distances that leave the running bounds unchanged: it never culls
+// (the other axes still do), which is conservative.
 template <class S>
 struct RayBoxes {
-    typename S::F org_vector[3], inv_dir_vector[3];
+    typename S::F entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];
     int entry_plane[3], exit_plane[3];
 
     explicit RayBoxes(const Ray& ray) {
+        constexpr float kInf = std::numeric_limits<float>::infinity();
         for (int axis = 0; axis < 3; ++axis) {
-            const float inv = 1.0f / ray.dir[axis];  // +-inf for axis-parallel rays
-            org_vector[axis] = S::set1(ray.org[axis]);
-            inv_dir_vector[axis] = S::set1(inv);
+            const float org = ray.org[axis], inv = 1.0f / ray.dir[axis];  // +-inf for axis-parallel rays
+            const float exit_inv = inv * (1.0f + 0x1p-21f);
+            const float scaled_org = org * inv, exit_scaled_org = org * exit_inv;
+            if (std::isfinite(exit_inv) && std::isfinite(exit_scaled_org)) {
+                entry_scale[axis] = S::set1(inv);
+                entry_offset[axis] = S::set1(scaled_org + (std::fabs(scaled_org) * 0x1p-21f + 0x1p-140f));
+                exit_scale[axis] = S::set1(exit_inv);
+                exit_offset[axis] = S::set1(exit_scaled_org - (std::fabs(exit_scaled_org) * 0x1p-21f + 0x1p-140f));
+            } else {
+                entry_scale[axis] = exit_scale[axis] = S::set1(0.0f);
+                entry_offset[axis] = S::set1(kInf);
+                exit_offset[axis] = S::set1(-kInf);
+            }
             const int negative = std::signbit(inv) ? 1 : 0;
             entry_plane[axis] = 2 * axis + negative;
             exit_plane[axis] = 2 * axis + 1 - negative;
         }
     }
-    typename S::F org(int axis) const { return org_vector[axis]; }
-    typename S::F inv_dir(int axis) const { return inv_dir_vector[axis]; }
 };
 
-// Tests all child boxes of `node`: the slab test of the binary kernel, lane-parallel, with the same
-// operand order (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound unchanged:
-// boxes are closed) and the same conservative widening of the exit distance (kFarScale). Returns the
-// number of children entered within [tmin, tmax], their entry distances and slots in slot order.
-// `Boxes` gives the ray's origin and inverse direction broadcast (RayBoxes, or a packet's ray).
+// Tests all child boxes of `node` for a single ray (RayBoxes): returns the mask of the children entered
+// within [tmin, tmax] (bit = slot) and sets `near` to every lane's entry distance. A NaN slab distance
+// (0 * inf: an empty slot on an axis the ray does not move along) leaves the running bound unchanged,
+// by the operand order of min and max.
+template <class S>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S>& ray, float tmin, float tmax,
+                                                      typename S::F& near) {
+    near = S::set1(tmin);
+    typename S::F far = S::set1(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const typename S::F t_entry = S::fmsub(S::load(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
+        const typename S::F t_exit = S::fmsub(S::load(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        near = S::max(t_entry, near);
+        far = S::min(t_exit, far);
+    }
+    return S::hit_mask(near, far);
+}
+
+// The packet kernel's test of one ray against all child boxes (`Boxes`: its origin and inverse
+// direction broadcast): the slab test of the binary kernel, lane-parallel, with the same operand order
+// (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound unchanged: boxes are
+// closed) and the same conservative widening of the exit distance (kFarScale), so it agrees lane for
+// lane with rays_entering_child. Returns the number of children entered within [tmin, tmax], their
+// entry distances and slots in slot order.
 template <class S, class Boxes>
 [[gnu::always_inline]] inline int enter_children(const WideNode<S::kLanes>& node, const Boxes& ray, float tmin, float tmax,
                                                  float* entry, uint32_t* slot) {
@@ -123,31 +170,63 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
             const WideNode<W>& node = layout.nodes[current.child];
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.planes[0][slot] <= node.planes[1][slot];
-            alignas(32) float entry[W];
-            alignas(32) uint32_t slot[W];
-            const int hits = enter_children<S>(node, boxes, ray.tmin, tmax, entry, slot);
-            if (hits == 1) {
-                current = {node.child[slot[0]], node.count[slot[0]], entry[0]};
-                prefetch_child(layout, current.child, current.count);
-                continue;
-            }
-            if (hits > 1) {
-                // Insertion sort, the child to visit next last (see visits_after). Ties keep slot order
-                // reversed; any order is exact.
-                for (int i = 1; i < hits; ++i) {
-                    const float key = entry[i];
-                    const uint32_t key_slot = slot[i];
-                    int j = i - 1;
-                    while (j >= 0 && visits_after<kAnyHit>(node, key, key_slot, entry[j], slot[j])) {
-                        entry[j + 1] = entry[j];
-                        slot[j + 1] = slot[j];
-                        --j;
-                    }
-                    entry[j + 1] = key;
-                    slot[j + 1] = key_slot;
+            typename S::F near;
+            unsigned mask = child_hit_mask<S>(node, boxes, ray.tmin, tmax, near);
+            if (mask != 0) {
+                // As Embree's single-ray traversal does: the first entered child straight from the mask
+                // (most nodes enter one), two compared directly, more pushed and sorted on the stack.
+                alignas(64) float entry[W];
+                S::store(entry, near);
+                const uint32_t first = uint32_t(__builtin_ctz(mask));
+                mask &= mask - 1;
+                if (mask == 0) {
+                    current = {node.child[first], node.count[first], entry[first]};
+                    prefetch_child(layout, current.child, current.count);
+                    continue;
                 }
-                for (int i = 0; i < hits - 1; ++i) stack[top++] = {node.child[slot[i]], node.count[slot[i]], entry[i]};
-                current = {node.child[slot[hits - 1]], node.count[slot[hits - 1]], entry[hits - 1]};
+                const uint32_t second = uint32_t(__builtin_ctz(mask));
+                mask &= mask - 1;
+                const Entry first_entry{node.child[first], node.count[first], entry[first]};
+                const Entry second_entry{node.child[second], node.count[second], entry[second]};
+                if (mask == 0) {
+                    // The order of the insertion sort below for two children (ties: the later slot first).
+                    if (visits_after<kAnyHit>(node, second_entry.entry, second, first_entry.entry, first)) {
+                        stack[top++] = second_entry;
+                        current = first_entry;
+                    } else {
+                        stack[top++] = first_entry;
+                        current = second_entry;
+                    }
+                } else {
+                    // Push every entered child in slot order, then insertion-sort them on the stack, the
+                    // child to visit next last (see visits_after); ties keep slot order reversed. Any
+                    // order is exact; this one is the same for every kernel width and ray.
+                    const int base = top;
+                    uint32_t slot[W];
+                    slot[top - base] = first;
+                    stack[top++] = first_entry;
+                    slot[top - base] = second;
+                    stack[top++] = second_entry;
+                    do {
+                        const uint32_t lane = uint32_t(__builtin_ctz(mask));
+                        mask &= mask - 1;
+                        slot[top - base] = lane;
+                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
+                    } while (mask != 0);
+                    for (int i = 1; i < top - base; ++i) {
+                        const Entry key = stack[base + i];
+                        const uint32_t key_slot = slot[i];
+                        int j = i - 1;
+                        while (j >= 0 && visits_after<kAnyHit>(node, key.entry, key_slot, stack[base + j].entry, slot[j])) {
+                            stack[base + j + 1] = stack[base + j];
+                            slot[j + 1] = slot[j];
+                            --j;
+                        }
+                        stack[base + j + 1] = key;
+                        slot[j + 1] = key_slot;
+                    }
+                    current = stack[--top];
+                }
                 prefetch_child(layout, current.child, current.count);
                 // The next pop is likely soon: fetch it too.
                 prefetch_child(layout, stack[top - 1].child, stack[top - 1].count);
