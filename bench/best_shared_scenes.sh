@@ -1,19 +1,20 @@
 #!/usr/bin/env bash
 # Issue #5's comparison on our best trees: per shared scene (and crytek_sponza rotated 45/45/45),
-# the reinsertion-optimised `cbvh+opt` and `spatial+opt` trees under the BVH8 kernel (widest node
-# test) and 8x8 packets, against Embree 3 HIGH rtcIntersect1/rtcOccluded1 and rtcIntersect16/
-# rtcOccluded16 (its primary rays in 4x4 tiles), all in the same run, 2 threads. Primary rays are
-# in 8x8 tile order for every row. Mrays/s are medians of 5 timed runs; every answer is checked
-# against Embree with the exact arbiter ("wrong"). Ends with the ratio summary of
-# bench/summarize_best.py. RUNS=N repeats the whole comparison N times (the machine is shared and
-# Embree's rows vary between runs), keeps each run's JSON in bench/best_runs/RUN/ and summarizes the
-# median ratio of each cell.
+# the reinsertion-optimised `cbvh+opt` and `spatial+opt` trees, plain SAH and with leaf blocks of
+# four (`@block=4;ct=2`: the SAH prices leaves by the packs of four the kernels test, as Embree's
+# does), under the BVH8 kernel (widest node test) and 8x8 packets, against Embree 3 HIGH
+# rtcIntersect1/rtcOccluded1 and rtcIntersect16/rtcOccluded16 (its primary rays in 4x4 tiles), all
+# in the same run, 2 threads. Primary rays are in 8x8 tile order for every row. Mrays/s are medians
+# of 5 timed runs, taken round robin over the rows; every answer is checked against Embree with the
+# exact arbiter ("wrong"). Ends with the ratio summary of bench/summarize_best.py. RUNS=N repeats
+# the whole comparison N times (the machine is shared and Embree's rows vary between runs), keeps
+# each run's JSON in bench/best_runs/RUN/ and summarizes the median ratio of each cell.
 # Usage: [RUNS=3] bash bench/best_shared_scenes.sh > best.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scenes=../shared/scenes
 if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
-common=(--builders cbvh+opt,spatial+opt --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
+common=(--builders "cbvh+opt,spatial+opt,cbvh+opt@block=4;ct=2,spatial+opt@block=4;ct=2" --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 runs=${RUNS:-1}
 echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"

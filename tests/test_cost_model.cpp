@@ -204,3 +204,28 @@ TEST(CostModel, DescribePrintsTheConstants) {
     EXPECT_EQ(model(0.5f, 2.0f, 1.5f).describe(), "C_T=0.5 C_I=2 C_o=1.5");
     EXPECT_EQ(model(1.0f, 1.0f, kInfinity).describe(), "C_T=1 C_I=1 C_o=inf");
 }
+
+// A leaf block B counts references in whole blocks of B (rounded up) in the leaf cost and both
+// children of the split cost; B = 1 is the plain SAH; B must be a power of two in [1, 64].
+TEST(CostModel, LeafBlocksRoundReferenceCountsUp) {
+    CostModel blocks = model(1.5f, 2.0f, 0.0f);
+    blocks.leaf_block = 4;
+    EXPECT_EQ(blocks.leaf_cost(0), 0.0f);
+    EXPECT_EQ(blocks.leaf_cost(1), 8.0f);  // one block of four: 2 * 4
+    EXPECT_EQ(blocks.leaf_cost(4), 8.0f);
+    EXPECT_EQ(blocks.leaf_cost(5), 16.0f);
+    // 1.5 + 2 * (24*4 + 24*8) / 40: |L| = 3 counts as 4, |R| = 5 as 8.
+    EXPECT_FLOAT_EQ(blocks.split_cost(kNode, kLeftHalf, 3, kRightHalf, 5), 1.5f + 2.0f * (24.0f * 4 + 24.0f * 8) / 40.0f);
+    // The same counts in whole blocks cost what the plain SAH says.
+    EXPECT_FLOAT_EQ(blocks.split_cost(kNode, kLeftHalf, 4, kRightHalf, 8),
+                    model(1.5f, 2.0f, 0.0f).split_cost(kNode, kLeftHalf, 4, kRightHalf, 8));
+    EXPECT_EQ(blocks.describe(), "C_T=1.5 C_I=2 C_o=0 B=4");
+    for (uint32_t bad : {0u, 3u, 6u, 128u}) {
+        blocks.leaf_block = bad;
+        EXPECT_THROW(blocks.validate(), Error) << bad;
+    }
+    for (uint32_t good : {1u, 2u, 8u, 64u}) {
+        blocks.leaf_block = good;
+        EXPECT_NO_THROW(blocks.validate()) << good;
+    }
+}

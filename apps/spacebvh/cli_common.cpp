@@ -52,6 +52,9 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     }
     command.add_option("--ct", traversal_cost, "C_T, cost of a traversal step")->capture_default_str();
     command.add_option("--ci", intersection_cost, "C_I, cost of a triangle test")->capture_default_str();
+    command.add_option("--leaf-block", leaf_block,
+                       "B: the SAH counts references in whole blocks of B (power of two; 4 = the kernels' packs of four, as Embree's SAH; 1 = plain SAH)")
+        ->capture_default_str();
     command.add_option("--co", overlap_penalty,
                        "C_o, overlap penalty (0 = plain SAH, inf = disjoint children only; default: the builder's)");
     command.add_option("--max-leaf", max_leaf_size, "largest leaf (nodes with more references are split)")
@@ -121,6 +124,7 @@ BuildOptions BuildCliOptions::options(const std::string& builder_text) const {
     BuildOptions options = options_for(is_embree_tree(builder_name) ? "binned" : builder_name);
     options.cost.traversal_cost = traversal_cost;
     options.cost.intersection_cost = intersection_cost;
+    options.cost.leaf_block = leaf_block;
     if (!overlap_penalty.empty()) options.cost.overlap_penalty = parse_float_or_inf(overlap_penalty, "--co");
     options.max_leaf_size = max_leaf_size;
     options.max_depth = max_depth;

@@ -31,6 +31,7 @@ struct SceneOptions {
 struct BuildCliOptions {
     std::string builder = "binned";
     float traversal_cost = 1.0f, intersection_cost = 1.0f;
+    uint32_t leaf_block = 1;
     std::string overlap_penalty;  // a number or "inf"; empty: the builder's own default
     uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
     float reference_budget = 1.3f;

@@ -4,6 +4,8 @@
 // the first row; and every row's answers checked against Embree with disagreements settled by the
 // exact arbiter (../shared/spec/rays.md).
 #include <cstdio>
+#include <deque>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -37,32 +39,59 @@ struct Row {
     size_t peak_rss_bytes = 0;  // the process's peak resident set when the row was done
 };
 
-// Median Mrays/s over `runs` timed runs of `trace` (after one warm-up run that also keeps the answers).
-template <typename Trace>
-double measure_mrays(size_t ray_count, int runs, Trace&& trace) {
-    trace();
-    std::vector<double> ms;
-    for (int run = 0; run < runs; ++run) {
-        throw_if_interrupted();
-        const auto start = std::chrono::steady_clock::now();
-        trace();
-        ms.push_back(milliseconds_since(start));
-    }
-    return double(ray_count) / median(ms) / 1000.0;
-}
+// One timed measurement: a row's tracer (ours or Embree's) on one ray kind, closest hits and
+// occlusion. `order`, when not empty, maps its rays back to the kind's ray set (Embree's packets trace
+// the primary rays in 4x4 tiles): answer i belongs to ray order[i].
+struct Measurement {
+    KindResult* result;
+    std::vector<Ray> rays;
+    std::vector<uint32_t> order;
+    std::function<void(std::span<const Ray>, std::span<Hit>)> intersect;
+    std::function<void(std::span<const Ray>, std::span<uint8_t>)> occluded;
+};
 
-// Anything with batch intersect(rays, hits) and occluded(rays, flags): our tracers, Embree's scenes.
-template <typename Intersect, typename Occluded>
-void trace_kind(Intersect&& intersect, Occluded&& occluded_batch, std::span<const Ray> rays, int runs, KindResult& result) {
-    std::vector<Hit> hits(rays.size());
-    std::vector<uint8_t> occluded(rays.size());
-    result.closest_mrays = measure_mrays(rays.size(), runs, [&] { intersect(rays, hits); });
-    result.occlusion_mrays = measure_mrays(rays.size(), runs, [&] { occluded_batch(rays, occluded); });
-    result.closest.resize(rays.size());
-    result.occlusion.resize(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i) {
-        result.closest[i] = to_record(hits[i]);
-        result.occlusion[i] = occlusion_record(occluded[i]);
+// Times every measurement `runs` times, round robin: run 1 of every row, then run 2 of every row, and
+// so on, after one warm-up run each (which also keeps the answers). The machines are shared and their
+// speed drifts over seconds; interleaved, a drift slows every row alike instead of the rows measured
+// during it, so the ratios between rows (ours / Embree) stay honest. Mrays/s = ray count / median time.
+void measure_round_robin(std::vector<Measurement>& measurements, int runs, const std::function<void(double)>& progress) {
+    const size_t total = measurements.size() * 2 * size_t(runs + 1);
+    size_t done = 0;
+    for (const bool occlusion : {false, true}) {
+        std::vector<std::vector<Hit>> hits(measurements.size());
+        std::vector<std::vector<uint8_t>> occluded(measurements.size());
+        auto trace = [&](size_t m) {
+            Measurement& measurement = measurements[m];
+            throw_if_interrupted();
+            if (occlusion) measurement.occluded(measurement.rays, occluded[m]);
+            else measurement.intersect(measurement.rays, hits[m]);
+            progress(double(++done) / double(total));
+        };
+        for (size_t m = 0; m < measurements.size(); ++m) {
+            hits[m].resize(occlusion ? 0 : measurements[m].rays.size());
+            occluded[m].resize(occlusion ? measurements[m].rays.size() : 0);
+            trace(m);  // warm-up; its answers are the ones checked
+        }
+        std::vector<std::vector<double>> ms(measurements.size());
+        for (int run = 0; run < runs; ++run) {
+            for (size_t m = 0; m < measurements.size(); ++m) {
+                const auto start = std::chrono::steady_clock::now();
+                trace(m);
+                ms[m].push_back(milliseconds_since(start));
+            }
+        }
+        for (size_t m = 0; m < measurements.size(); ++m) {
+            Measurement& measurement = measurements[m];
+            KindResult& result = *measurement.result;
+            const double mrays = double(measurement.rays.size()) / median(ms[m]) / 1000.0;
+            std::vector<HitRecord>& records = occlusion ? result.occlusion : result.closest;
+            records.resize(measurement.rays.size());
+            for (size_t i = 0; i < measurement.rays.size(); ++i) {
+                const size_t ray = measurement.order.empty() ? i : measurement.order[i];
+                records[ray] = occlusion ? occlusion_record(occluded[m][i]) : to_record(hits[m][i]);
+            }
+            (occlusion ? result.occlusion_mrays : result.closest_mrays) = mrays;
+        }
     }
 }
 
@@ -78,7 +107,7 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
+// "NAME" or "NAME@co=0.3;ct=3;ci=1;leaf=8;block=4;budget=1.5;bins=64;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
 // a builder with some options of its own. "NAME+opt" is NAME with the reinsertion optimisation; the
 // label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
 struct BuilderSpec {
@@ -95,6 +124,10 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             if (equals == std::string::npos) throw Error("builder '" + text + "': expected key=value after '@'");
             const std::string key = setting.substr(0, equals), value = setting.substr(equals + 1);
             if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
+            else if (key == "ct") spec.options.cost.traversal_cost = parse_float_or_inf(value, "ct");
+            else if (key == "ci") spec.options.cost.intersection_cost = parse_float_or_inf(value, "ci");
+            else if (key == "leaf") spec.options.max_leaf_size = parse_unsigned(value, "leaf");
+            else if (key == "block") spec.options.cost.leaf_block = parse_unsigned(value, "block");
             else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
             else if (key == "bins") spec.options.spatial_bins = parse_unsigned(value, "bins");
             else if (key == "search") spec.options.search_spaces = parse_search_spaces(value);
@@ -106,7 +139,7 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
             else if (key == "optimize") spec.options.reinsertion_iterations = parse_unsigned(value, "optimize");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, budget, bins, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
+                             "' (co, ct, ci, leaf, block, budget, bins, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
         }
         spec.options.validate();
     }
@@ -248,12 +281,22 @@ void add_compare_command(CLI::App& app) {
             Progress progress("compare " + scene.name, options->common);
             const size_t our_rows = builders.size() * kernels.size();
             const size_t row_total = our_rows + embree_rows.size() + embree_packet_rows.size();
-            auto report = [&](size_t row, double within) { progress.update((double(row) + within) / double(row_total)); };
+            auto report = [&](double fraction) { progress.update(fraction); };
 
+            // Every row's tree or scene first (kept alive), then all the timing, round robin.
+            rows.reserve(row_total);  // measurements point into the rows
+            std::vector<Measurement> measurements;
+            std::deque<Bvh> trees;
+            std::vector<std::unique_ptr<Tracer>> tracers;
+            std::vector<std::unique_ptr<EmbreeScene>> embree_scenes;
+            auto add_measurement = [&](KindResult& result, std::vector<Ray> rays, auto intersect, auto occluded) {
+                measurements.push_back({&result, std::move(rays), {}, intersect, occluded});
+            };
+            const double build_share = 0.3;  // of the progress bar
             for (size_t b = 0; b < builders.size(); ++b) {
                 const BuildOptions& build_options = builders[b].options;
                 std::vector<double> build_ms;
-                Bvh bvh;
+                Bvh& bvh = trees.emplace_back();
                 for (int run = 0; run < options->build_runs; ++run) {
                     const auto start = std::chrono::steady_clock::now();
                     bvh = build_tree(scene, build_options);
@@ -267,34 +310,33 @@ void add_compare_command(CLI::App& app) {
                     ray_sets[int(RayKind::primary)] = gathered(primary_row_major, primary_order);
                 }
                 for (size_t k = 0; k < kernels.size(); ++k) {
-                    Row row;
+                    Row& row = rows.emplace_back();
                     row.name = builders[b].label + " (C_o=" + number_or_dash(build_options.cost.overlap_penalty, 2) + ")";
                     row.cost = build_options.cost;
                     row.build_ms = median(build_ms);
                     row.stats = tree_stats;
-                    std::map<std::string, std::unique_ptr<Tracer>> tracers;  // by kernel name, shared between kinds
+                    std::map<std::string, const Tracer*> by_kernel;  // shared between kinds
                     for (RayKind kind : kKinds) {
                         const std::string name = kernel_for(kernels[k], kind);
-                        auto& tracer = tracers[name];
-                        if (!tracer) tracer = make_tracer(name, scene, bvh);
+                        const Tracer*& tracer = by_kernel[name];
+                        if (!tracer) tracer = tracers.emplace_back(make_tracer(name, scene, bvh)).get();
                         row.kernels[int(kind)] = tracer->name();
                         KindResult& result = row.kinds[int(kind)];
                         const auto& rays = ray_sets[int(kind)];
-                        trace_kind([&](auto r, auto h) { tracer->intersect(r, h); },
-                                   [&](auto r, auto o) { tracer->occluded(r, o); }, rays, options->runs, result);
+                        add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
+                                        [tracer](auto r, auto o) { tracer->occluded(r, o); });
                         TraversalStats stats;
                         std::vector<Hit> hits(rays.size());
                         tracer->intersect(rays, hits, &stats);
                         const double n = std::max<double>(1.0, double(hits.size()));
                         result.nodes_per_ray = double(stats.nodes_visited) / n;
                         result.triangles_per_ray = double(stats.triangles_tested) / n;
-                        report(b * kernels.size() + k, (int(kind) + 1) / 3.0);
                     }
                     row.peak_rss_bytes = peak_rss_bytes();
                     row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
                                      ? row.kernels[0]
                                      : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
-                    rows.push_back(std::move(row));
+                    report(build_share * double(rows.size()) / double(row_total));
                 }
             }
             // Embree: single rays (rtcIntersect1/rtcOccluded1) per quality, then 16-ray packets
@@ -306,42 +348,39 @@ void add_compare_command(CLI::App& app) {
             for (size_t e = 0; e < embree_rows.size() + embree_packet_rows.size(); ++e) {
                 const bool packets = e >= embree_rows.size();
                 const EmbreeQuality quality = packets ? embree_packet_rows[e - embree_rows.size()] : embree_rows[e];
-                Row row;
+                Row& row = rows.emplace_back();
                 row.name = std::string("embree-") + to_string(quality);
                 row.kernel = packets ? "Embree rtcIntersect16/rtcOccluded16" : "Embree rtcIntersect1/rtcOccluded1";
                 std::vector<double> build_ms;
-                std::optional<EmbreeScene> embree;
+                std::unique_ptr<EmbreeScene>& embree = embree_scenes.emplace_back();
                 for (int run = 0; run < options->build_runs; ++run) {
                     embree.reset();
-                    embree.emplace(scene, quality);
+                    embree = std::make_unique<EmbreeScene>(scene, quality);
                     build_ms.push_back(embree->build_milliseconds());
                     throw_if_interrupted();
                 }
                 row.build_ms = median(build_ms);
+                const EmbreeScene* traced = embree.get();
                 for (RayKind kind : kKinds) {
                     KindResult& result = row.kinds[int(kind)];
                     if (!packets) {
-                        trace_kind([&](auto r, auto h) { embree->intersect(r, h); },
-                                   [&](auto r, auto o) { embree->occluded(r, o); }, ray_sets[int(kind)], options->runs, result);
+                        add_measurement(result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect(r, h); },
+                                        [traced](auto r, auto o) { traced->occluded(r, o); });
                     } else if (kind != RayKind::primary || tiles_of_16.empty()) {
-                        trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
-                                   [&](auto r, auto o) { embree->occluded16(r, o); }, ray_sets[int(kind)], options->runs, result);
+                        add_measurement(result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect16(r, h); },
+                                        [traced](auto r, auto o) { traced->occluded16(r, o); });
                     } else {
-                        trace_kind([&](auto r, auto h) { embree->intersect16(r, h); },
-                                   [&](auto r, auto o) { embree->occluded16(r, o); }, gathered(primary_row_major, tiles_of_16),
-                                   options->runs, result);
-                        KindResult ours_order = result;
-                        for (size_t i = 0; i < tiles_of_16.size(); ++i) {
-                            ours_order.closest[position_in_primary[tiles_of_16[i]]] = result.closest[i];
-                            ours_order.occlusion[position_in_primary[tiles_of_16[i]]] = result.occlusion[i];
-                        }
-                        result = std::move(ours_order);
+                        add_measurement(result, gathered(primary_row_major, tiles_of_16),
+                                        [traced](auto r, auto h) { traced->intersect16(r, h); },
+                                        [traced](auto r, auto o) { traced->occluded16(r, o); });
+                        for (uint32_t pixel : tiles_of_16) measurements.back().order.push_back(position_in_primary[pixel]);
                     }
-                    report(our_rows + e, (int(kind) + 1) / 3.0);
                 }
                 row.peak_rss_bytes = peak_rss_bytes();
-                rows.push_back(std::move(row));
+                report(build_share * double(rows.size()) / double(row_total));
             }
+            measure_round_robin(measurements, options->runs,
+                                [&](double within) { report(build_share + (1.0 - build_share) * within); });
 
             // Correctness: each row against a reference row (the first Embree row for our builders, our
             // first builder for Embree rows); the arbiter settles every disagreement.

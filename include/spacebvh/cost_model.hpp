@@ -3,9 +3,14 @@
 // Split cost (Popov et al. 2009, slide "Penalizing Overlap"):
 //   cost = C_T + (1 + C_o * V(L ∩ R) / V(N)) * C_I * (SA(L)*|L| + SA(R)*|R|) / SA(N)
 // Leaf cost: C_I * |N|.
+// With a leaf block B > 1 (a power of two), |L|, |R| and |N| above count references in whole blocks of
+// B, rounded up (Embree's SAH, for kernels that test B triangles at once: our packs of four make a leaf
+// of 1 to 4 triangles cost one test). B = 1 is the plain SAH. The tree SAH metric never rounds.
 // Tree SAH: sum_inner C_T*SA(n)/SA(root) + sum_leaf C_I*SA(l)*|l|/SA(root) (Aila, Karras, Laine 2013).
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "spacebvh/geometry.hpp"
@@ -17,12 +22,18 @@ struct CostModel {
     float intersection_cost = 1.0f;  // C_I
     // C_o: 0 = plain SAH; +inf = children must be disjoint (any overlap makes a split infeasible).
     float overlap_penalty = 0.0f;
+    // B: references are counted in whole blocks of B (a power of two, 1 = plain SAH); see above.
+    uint32_t leaf_block = 1;
 
     // Throws Error for negative or NaN constants.
     void validate() const;
-    std::string describe() const;  // "C_T=1 C_I=1 C_o=0", printed with every figure
+    std::string describe() const;  // "C_T=1 C_I=1 C_o=0" (and " B=4" for blocks), printed with every figure
 
-    float leaf_cost(size_t reference_count) const { return intersection_cost * float(reference_count); }
+    // The reference count rounded up to whole blocks.
+    float counted(size_t reference_count) const {
+        return float((reference_count + leaf_block - 1) & ~size_t(leaf_block - 1));
+    }
+    float leaf_cost(size_t reference_count) const { return intersection_cost * counted(reference_count); }
 
     // The split cost above; +inf when infeasible (C_o = inf and the children overlap).
     // SA(N) = 0 (a point or a line of primitives): the area ratio is taken as 1 per reference, so
@@ -44,8 +55,8 @@ inline float CostModel::split_cost(const AABB& node, const AABB& left, size_t le
     const float node_area = node.area();
     // A point or a line of primitives (SA(N) = 0): no area to divide, each reference costs one test.
     const float weighted_area = node_area > 0.0f
-                                    ? (left.area() * float(left_count) + right.area() * float(right_count)) / node_area
-                                    : float(left_count + right_count);
+                                    ? (left.area() * counted(left_count) + right.area() * counted(right_count)) / node_area
+                                    : counted(left_count) + counted(right_count);
     float overlap_factor = 1.0f;
     if (overlap_penalty != 0.0f) {
         const float overlap = overlap_fraction(node, left, right);

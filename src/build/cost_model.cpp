@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "spacebvh/error.hpp"
 
@@ -20,11 +21,14 @@ void CostModel::validate() const {
     check(intersection_cost, "C_I (intersection cost)", false);
     check(overlap_penalty, "C_o (overlap penalty)", true);
     if (intersection_cost == 0.0f) throw Error("cost model: C_I (intersection cost) must be > 0");
+    if (leaf_block < 1 || leaf_block > 64 || (leaf_block & (leaf_block - 1)) != 0)
+        throw Error("cost model: leaf block B must be a power of two in [1, 64], got " + std::to_string(leaf_block));
 }
 
 std::string CostModel::describe() const {
     std::ostringstream text;
     text << "C_T=" << traversal_cost << " C_I=" << intersection_cost << " C_o=" << overlap_penalty;
+    if (leaf_block != 1) text << " B=" << leaf_block;
     return text.str();
 }
 
