@@ -24,7 +24,8 @@ COLUMNS = [(kind, field) for kind in ("random", "primary", "diffuse") for field 
 
 
 def ratios(path):
-    """One run of one scene: (scene, [(ratio, tree, kernel) per column], packet ratio, wrong answers)."""
+    """One run of one scene: (scene, [(ratio, tree, kernel) per column], packet ratio, (our wrong answers,
+    Embree's wrong answers))."""
     data = json.load(open(path))
     scene = data["scenes"][0]
     name = os.path.basename(path).removeprefix("best_").removesuffix(".json")
@@ -39,8 +40,10 @@ def ratios(path):
     packet_rows = [r for r in ours if r["kernel"].startswith("packet")]
     best_packet = max(packet_rows, key=lambda r: r["primary"]["closest_mrays"])
     packet_ratio = best_packet["primary"]["closest_mrays"] / packets["primary"]["closest_mrays"]
-    wrong = sum(r[kind].get("wrong", 0) for r in rows for kind in ("random", "primary", "diffuse"))
-    return name, cells, packet_ratio, wrong
+    def wrong_in(selected):
+        return sum(r[kind].get("wrong", 0) for r in selected for kind in ("random", "primary", "diffuse"))
+    embree = [r for r in rows if r["builder"].startswith("embree")]
+    return name, cells, packet_ratio, (wrong_in(ours), wrong_in(embree))
 
 
 def table_row(runs):
@@ -56,8 +59,9 @@ def table_row(runs):
         cells.append(f"{ratio:.2f} ({tree}, {kernel}; goal {max(1.0, peer):.2f}{spread})")
     packet = sorted(run[2] for run in runs)
     packet_cell = f"{packet[len(packet) // 2]:.2f}" + (f" ({packet[0]:.2f}-{packet[-1]:.2f})" if len(runs) > 1 else "")
-    wrong = sum(run[3] for run in runs)
-    return f"| {name} | " + " | ".join(cells) + f" | {packet_cell} | {wrong} |"
+    ours = sum(run[3][0] for run in runs)
+    embree = sum(run[3][1] for run in runs)
+    return f"| {name} | " + " | ".join(cells) + f" | {packet_cell} | {ours} | {embree} |"
 
 
 # Arguments: JSON files (one run) or directories (one run each, holding best_SCENE.json files).
@@ -75,7 +79,7 @@ else:
 print(f"{len(groups[0]) if groups else 0} run(s); cell = median over runs of our fastest row / Embree HIGH single rays")
 print()
 print("| scene | random closest | random occl. | primary closest | primary occl. | diffuse closest | diffuse occl. |"
-      " packets / rtcIntersect16 (primary) | wrong |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+      " packets / rtcIntersect16 (primary) | our wrong answers | Embree's wrong answers |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for runs in groups:
     print(table_row(runs))
