@@ -102,19 +102,7 @@ struct SseOperations {
     static F add(F a, F b) { return _mm_add_ps(a, b); }
     static F div(F a, F b) { return _mm_div_ps(a, b); }
     static F abs(F a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
-    // a * b - c rounded once (the fused box test of wide_kernel.inl relies on the single rounding).
-    static F fmsub(F a, F b, F c) {
-#ifdef __FMA__
-        return _mm_fmsub_ps(a, b, c);
-#else
-        alignas(16) float x[4], y[4], z[4];
-        _mm_store_ps(x, a);
-        _mm_store_ps(y, b);
-        _mm_store_ps(z, c);
-        for (int i = 0; i < 4; ++i) x[i] = std::fma(x[i], y[i], -z[i]);
-        return _mm_load_ps(x);
-#endif
-    }
+    static F fmsub(F a, F b, F c) { return fused_multiply_subtract(a, b, c); }
     static unsigned less_mask(F a, F b) { return unsigned(_mm_movemask_ps(_mm_cmplt_ps(a, b))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm_movemask_ps(_mm_cmple_ps(near, limit))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {

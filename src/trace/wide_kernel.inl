@@ -8,51 +8,24 @@
 // kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
 // No lambdas here: they would not inherit the target of the pragma region.
 
-// Per-ray constants of the single-ray box test (fused form, as Embree's): per axis an entry and an
-// exit scale (about 1/d) and offset (about o/d), and which plane of a node's SoA boxes the ray enters
-// through (the lower one for a positive direction) and which it leaves through. A slab distance is
-// then one fused multiply-subtract, plane * scale - offset, instead of (plane - o) * (1/d) in two
-// dependent steps, and the exit distances need no widening afterwards: a shorter chain per node.
-//
-// Why no box a ray enters within [tmin, tmax] is culled (u = 2^-24; t = (p - o) / d exact; t >= 0, as
-// the spec's rays have tmin >= 0).
-// Entry: r = (1/d)(1 + e_r), q = o r (1 + e_q), so p r - q = t (1 + e_r) - o r e_q: an error relative to
-// t plus an absolute one up to |q| u (1 + 2u), which can dwarf t (a box near a ray's origin far from the
-// world's origin). The entry offset is q raised past that (slack |q| 2^-21, ample for the rounding of
-// the sum), so the fused result is at most t (1 + u)^2.
-// Exit: scale R = fl(r s) with s = 1 + 2^-21, so p R = K (t + o/d) and o R = K o/d with one constant
-// K in [s (1 - u)^2, s (1 + u)^2]; the exit offset is fl(o R) lowered past its rounding, so
-// p R - offset >= K t and the fused result is at least s (1 - u)^3 t >= (1 + u)^2 t, no less than any
-// entry distance of the same box: the widening of Ize ("Robust BVH Ray Traversal", JCGT 2013) folded
-// into the constants. Both slacks add 2^-140 for values in the subnormal range.
-// Answers cannot change (the exact triangle test decides them); at most a few more boxes are entered.
-// An axis along which the ray does not move (d = 0, or a scale or offset not finite) gets scale 0 and
-// offsets +-inf, i.e. NaN or -+inf distances that leave the running bounds unchanged: it never culls
-// (the other axes still do), which is conservative.
+// Per-ray constants of the single-ray box test: the fused slab constants of each axis
+// (traversal_common.hpp, FusedSlab: why the test stays conservative) broadcast, and which plane of a
+// node's SoA boxes the ray enters through (the lower one for a positive direction) and which it
+// leaves through.
 template <class S>
 struct RayBoxes {
     typename S::F entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];
     int entry_plane[3], exit_plane[3];
 
     explicit RayBoxes(const Ray& ray) {
-        constexpr float kInf = std::numeric_limits<float>::infinity();
         for (int axis = 0; axis < 3; ++axis) {
-            const float org = ray.org[axis], inv = 1.0f / ray.dir[axis];  // +-inf for axis-parallel rays
-            const float exit_inv = inv * (1.0f + 0x1p-21f);
-            const float scaled_org = org * inv, exit_scaled_org = org * exit_inv;
-            if (std::isfinite(exit_inv) && std::isfinite(exit_scaled_org)) {
-                entry_scale[axis] = S::set1(inv);
-                entry_offset[axis] = S::set1(scaled_org + (std::fabs(scaled_org) * 0x1p-21f + 0x1p-140f));
-                exit_scale[axis] = S::set1(exit_inv);
-                exit_offset[axis] = S::set1(exit_scaled_org - (std::fabs(exit_scaled_org) * 0x1p-21f + 0x1p-140f));
-            } else {
-                entry_scale[axis] = exit_scale[axis] = S::set1(0.0f);
-                entry_offset[axis] = S::set1(kInf);
-                exit_offset[axis] = S::set1(-kInf);
-            }
-            const int negative = std::signbit(inv) ? 1 : 0;
-            entry_plane[axis] = 2 * axis + negative;
-            exit_plane[axis] = 2 * axis + 1 - negative;
+            const FusedSlab slab(ray.org[axis], ray.dir[axis]);
+            entry_scale[axis] = S::set1(slab.entry_scale);
+            entry_offset[axis] = S::set1(slab.entry_offset);
+            exit_scale[axis] = S::set1(slab.exit_scale);
+            exit_offset[axis] = S::set1(slab.exit_offset);
+            entry_plane[axis] = 2 * axis + (slab.negative ? 1 : 0);
+            exit_plane[axis] = 2 * axis + (slab.negative ? 0 : 1);
         }
     }
 };
