@@ -78,14 +78,15 @@ template <class S, bool kAnyHit, bool kStats>
                                                                  hit, found, stats);
 }
 
-// The order children are visited in (closest hits here; any hit in the packet kernel, the single-ray
-// kernel picks only the farthest, see traverse): true when child a (entered at entry_a) is visited
-// after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any hit: leaves first (a hit
-// there ends the ray at once), then the inner children farthest first. Nearest first is the worst
-// order for occlusion: diffuse rays start on a surface, whose neighbourhood they must cross but which
-// rarely occludes them. Sponza, BVH8, boxes tested per occlusion ray (binned / spatial tree): diffuse
-// 35.2 / 63.0 in slot order, 43.0 / 87.0 nearest first, 27.1 / 30.0 farthest first; random and
-// primary 26.5 and 30.8 (binned, slot order) -> 21.2 and 27.6.
+// The order children are visited in (closest hits here; any hit only in the packet kernel: the
+// single-ray kernel picks the farthest child, see traverse): true when child a (entered at entry_a)
+// is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
+// hit: leaves first (a hit there ends the ray at once), then the inner children farthest first.
+// Nearest first is the worst order for occlusion: diffuse rays start on a surface, whose
+// neighbourhood they must cross but which rarely occludes them. Sponza, BVH8, boxes tested per
+// occlusion ray (binned / spatial tree): diffuse 35.2 / 63.0 in slot order, 43.0 / 87.0 nearest
+// first, 27.1 / 30.0 farthest first; random and primary 26.5 and 30.8 (binned, slot order) -> 21.2
+// and 27.6.
 template <bool kAnyHit, int W>
 [[gnu::always_inline]] inline bool visits_after(const WideNode<W>& node, float entry_a, uint32_t slot_a, float entry_b,
                                                  uint32_t slot_b) {
@@ -185,7 +186,7 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 const Entry second_entry{node.child[second], node.count[second], entry[second]};
                 if (mask == 0) {
                     // The order of the insertion sort below for two children (ties: the later slot first).
-                    if (visits_after<kAnyHit>(node, second_entry.entry, second, first_entry.entry, first)) {
+                    if (visits_after<false>(node, second_entry.entry, second, first_entry.entry, first)) {
                         stack[top++] = second_entry;
                         current = first_entry;
                     } else {
@@ -212,7 +213,7 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                         const Entry key = stack[base + i];
                         const uint32_t key_slot = slot[i];
                         int j = i - 1;
-                        while (j >= 0 && visits_after<kAnyHit>(node, key.entry, key_slot, stack[base + j].entry, slot[j])) {
+                        while (j >= 0 && visits_after<false>(node, key.entry, key_slot, stack[base + j].entry, slot[j])) {
                             stack[base + j + 1] = stack[base + j];
                             slot[j + 1] = slot[j];
                             --j;
