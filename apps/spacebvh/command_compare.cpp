@@ -44,7 +44,8 @@ struct Row {
 // the primary rays in 4x4 tiles): answer i belongs to ray order[i].
 struct Measurement {
     KindResult* result;
-    std::vector<Ray> rays;
+    std::span<const Ray> rays;  // the kind's ray set, or `reordered`
+    std::vector<Ray> reordered;  // its own order of the rays, when it has one (its buffer survives moves)
     std::vector<uint32_t> order;
     std::function<void(std::span<const Ray>, std::span<Hit>)> intersect;
     std::function<void(std::span<const Ray>, std::span<uint8_t>)> occluded;
@@ -289,8 +290,8 @@ void add_compare_command(CLI::App& app) {
             std::deque<Bvh> trees;
             std::vector<std::unique_ptr<Tracer>> tracers;
             std::vector<std::unique_ptr<EmbreeScene>> embree_scenes;
-            auto add_measurement = [&](KindResult& result, std::vector<Ray> rays, auto intersect, auto occluded) {
-                measurements.push_back({&result, std::move(rays), {}, intersect, occluded});
+            auto add_measurement = [&](KindResult& result, std::span<const Ray> rays, auto intersect, auto occluded) {
+                measurements.push_back({&result, rays, {}, {}, intersect, occluded});
             };
             const double build_share = 0.3;  // of the progress bar
             for (size_t b = 0; b < builders.size(); ++b) {
@@ -370,10 +371,12 @@ void add_compare_command(CLI::App& app) {
                         add_measurement(result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect16(r, h); },
                                         [traced](auto r, auto o) { traced->occluded16(r, o); });
                     } else {
-                        add_measurement(result, gathered(primary_row_major, tiles_of_16),
-                                        [traced](auto r, auto h) { traced->intersect16(r, h); },
+                        add_measurement(result, {}, [traced](auto r, auto h) { traced->intersect16(r, h); },
                                         [traced](auto r, auto o) { traced->occluded16(r, o); });
-                        for (uint32_t pixel : tiles_of_16) measurements.back().order.push_back(position_in_primary[pixel]);
+                        Measurement& tiled = measurements.back();
+                        tiled.reordered = gathered(primary_row_major, tiles_of_16);
+                        tiled.rays = tiled.reordered;
+                        for (uint32_t pixel : tiles_of_16) tiled.order.push_back(position_in_primary[pixel]);
                     }
                 }
                 row.peak_rss_bytes = peak_rss_bytes();
