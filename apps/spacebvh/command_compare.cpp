@@ -4,7 +4,6 @@
 // the first row; and every row's answers checked against Embree with disagreements settled by the
 // exact arbiter (../shared/spec/rays.md).
 #include <cstdio>
-#include <deque>
 #include <functional>
 #include <map>
 #include <sstream>
@@ -282,12 +281,11 @@ void add_compare_command(CLI::App& app) {
             Progress progress("compare " + scene.name, options->common);
             const size_t our_rows = builders.size() * kernels.size();
             const size_t row_total = our_rows + embree_rows.size() + embree_packet_rows.size();
-            auto report = [&](double fraction) { progress.update(fraction); };
 
-            // Every row's tree or scene first (kept alive), then all the timing, round robin.
+            // Every row's tracer or Embree scene first (kept alive; a tracer holds its own layout, not
+            // the tree), then all the timing, round robin.
             rows.reserve(row_total);  // measurements point into the rows
             std::vector<Measurement> measurements;
-            std::deque<Bvh> trees;
             std::vector<std::unique_ptr<Tracer>> tracers;
             std::vector<std::unique_ptr<EmbreeScene>> embree_scenes;
             auto add_measurement = [&](KindResult& result, std::span<const Ray> rays, auto intersect, auto occluded) {
@@ -297,7 +295,7 @@ void add_compare_command(CLI::App& app) {
             for (size_t b = 0; b < builders.size(); ++b) {
                 const BuildOptions& build_options = builders[b].options;
                 std::vector<double> build_ms;
-                Bvh& bvh = trees.emplace_back();
+                Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
                     const auto start = std::chrono::steady_clock::now();
                     bvh = build_tree(scene, build_options);
@@ -337,7 +335,7 @@ void add_compare_command(CLI::App& app) {
                     row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
                                      ? row.kernels[0]
                                      : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
-                    report(build_share * double(rows.size()) / double(row_total));
+                    progress.update(build_share * double(rows.size()) / double(row_total));
                 }
             }
             // Embree: single rays (rtcIntersect1/rtcOccluded1) per quality, then 16-ray packets
@@ -380,10 +378,10 @@ void add_compare_command(CLI::App& app) {
                     }
                 }
                 row.peak_rss_bytes = peak_rss_bytes();
-                report(build_share * double(rows.size()) / double(row_total));
+                progress.update(build_share * double(rows.size()) / double(row_total));
             }
             measure_round_robin(measurements, options->runs,
-                                [&](double within) { report(build_share + (1.0 - build_share) * within); });
+                                [&](double within) { progress.update(build_share + (1.0 - build_share) * within); });
 
             // Correctness: each row against a reference row (the first Embree row for our builders, our
             // first builder for Embree rows); the arbiter settles every disagreement.

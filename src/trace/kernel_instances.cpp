@@ -166,6 +166,8 @@ struct Policy;
 template <>
 struct Policy<4> : SseOperations {
     static unsigned hit_mask(__m128 near, __m128 limit) { return _mm_cmp_ps_mask(near, limit, _CMP_LE_OQ); }
+    // Its own: SseOperations::fmsub is compiled outside this target region and, in a portable build
+    // (no -mfma), falls back to std::fma per lane.
     static __m128 fmsub(__m128 a, __m128 b, __m128 c) { return _mm_fmsub_ps(a, b, c); }
     static int collect(unsigned mask, __m128 near, float* entry, uint32_t* slot) {
         _mm_storeu_ps(entry, _mm_maskz_compress_ps(__mmask8(mask), near));

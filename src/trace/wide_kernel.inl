@@ -3,9 +3,9 @@
 // `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.
 //
 // A policy S provides: kLanes (the node width W), the vector type F with load/store/set1/sub/mul/min/max
-// and fmsub (a * b - c, rounded once), hit_mask(near, limit) (bit i: near[i] <= limit[i]), collect(mask, near, entry, slot) (writes the
-// entry distances and slots of the hit children in slot order, returns their number), and
-// kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
+// and fmsub (a * b - c, rounded once), hit_mask(near, limit) (bit i: near[i] <= limit[i]),
+// collect(mask, near, entry, slot) (writes the entry distances and slots of the hit children in slot
+// order, returns their number), and kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
 // No lambdas here: they would not inherit the target of the pragma region.
 
 // Per-ray constants of the single-ray box test: the fused slab constants of each axis
@@ -199,9 +199,9 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                     // order is exact; this one is the same for every kernel width and ray.
                     const int base = top;
                     uint32_t slot[W];
-                    slot[top - base] = first;
+                    slot[0] = first;
+                    slot[1] = second;
                     stack[top++] = first_entry;
-                    slot[top - base] = second;
                     stack[top++] = second_entry;
                     do {
                         const uint32_t lane = uint32_t(__builtin_ctz(mask));
