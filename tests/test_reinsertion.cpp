@@ -211,7 +211,9 @@ TEST(Reinsertion, TinyAndEmptyTrees) {
         const Bvh better = build_bvh(part, optimized(options));
         EXPECT_EQ(better.builder, "binned+opt");
         EXPECT_EQ(better.nodes.size(), 2 * triangles - 1);
-        if (triangles <= 2) EXPECT_EQ(first_difference(plain, better), "");
+        if (triangles <= 2) {
+            EXPECT_EQ(first_difference(plain, better), "");
+        }
         EXPECT_LE(tree_sah(better, options.cost), tree_sah(plain, options.cost));
         EXPECT_EQ(tree_violations(part, better, options), "");
     }

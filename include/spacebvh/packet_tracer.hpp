@@ -15,7 +15,8 @@ class PacketTracer final : public Tracer {
 public:
     // `packet_size` consecutive rays of a batch form a packet (1..256; 64 = an 8x8 tile, 256 = 16x16
     // when the rays are in tile_order). Node tests: scalar, avx2 or avx512 (8-wide nodes).
-    PacketTracer(const Scene& scene, const Bvh& bvh, uint32_t packet_size = 64, NodeTest test = NodeTest::best);
+    PacketTracer(const Scene& scene, const Bvh& bvh, uint32_t packet_size = 64, NodeTest test = NodeTest::best,
+                 WideCollapse collapse = WideCollapse::sah_optimal);
     ~PacketTracer() override;
     PacketTracer(PacketTracer&&) noexcept;
     PacketTracer& operator=(PacketTracer&&) noexcept;

@@ -83,8 +83,9 @@ private:
 // test this CPU has) or "bvh4-NODETEST" / "bvh8-NODETEST" with NODETEST one of scalar, sse, avx2,
 // avx512 (wide_tracer.hpp); packets of consecutive rays "packet8" / "packet16" (64 or 256 rays: 8x8 or
 // 16x16 tiles when the rays are in tile_order; packet_tracer.hpp), also with "-NODETEST"; and "auto",
-// the fastest single-ray kernel measured (bench/RESULTS.md). Throws Error for an unknown name or a
-// node test this CPU or width lacks.
+// the fastest single-ray kernel measured (bench/RESULTS.md). Wide kernels collapse the tree
+// SAH-optimally; NAME@area collapses it as Embree does (WideCollapse). Throws Error for an unknown
+// name or a node test this CPU or width lacks.
 std::unique_ptr<Tracer> make_tracer(const std::string& kernel, const Scene& scene, const Bvh& bvh);
 // The names make_tracer accepts on this CPU.
 std::vector<std::string> kernel_names();

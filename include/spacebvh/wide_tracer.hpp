@@ -22,16 +22,29 @@ enum class NodeTest {
     avx512,  // AVX-512VL mask compares and compress-store of the hit children (width 4 and 8)
 };
 const char* to_string(NodeTest test);
+
+// How a binary tree is collapsed into wide nodes.
+enum class WideCollapse {
+    // Ylitie, Karras, Laine 2017: the cheapest cut of the binary tree into wide nodes under a wide
+    // SAH (a node test and a four-triangle pack test per box entered, at equal cost), found by
+    // dynamic programming; small subtrees may become one leaf and nodes may keep fewer children.
+    sah_optimal,
+    // Embree's: from a node's two children, open the child of largest surface area until the node has
+    // W children or only leaves.
+    largest_area,
+};
+const char* to_string(WideCollapse collapse);  // "sah", "area"
+// How make_tracer names mark a collapse: "" for sah_optimal (the default), "@area".
+std::string collapse_suffix(WideCollapse collapse);
 // The node tests available for `width` (4 or 8) on this CPU, "best" excluded, slowest first.
 std::vector<NodeTest> supported_node_tests(int width);
 
 class WideTracer final : public Tracer {
 public:
-    // Collapses `bvh` into `width`-wide nodes (4 or 8): from a node's two children, the child of
-    // largest surface area is opened (replaced by its children) until the node has `width` children
-    // or only leaves, as Embree's collapse does. Throws Error for another width or a node test this
-    // CPU or width lacks.
-    WideTracer(const Scene& scene, const Bvh& bvh, int width, NodeTest test = NodeTest::best);
+    // Collapses `bvh` into `width`-wide nodes (4 or 8) by `collapse`. Throws Error for another width
+    // or a node test this CPU or width lacks.
+    WideTracer(const Scene& scene, const Bvh& bvh, int width, NodeTest test = NodeTest::best,
+               WideCollapse collapse = WideCollapse::sah_optimal);
     ~WideTracer() override;
     WideTracer(WideTracer&&) noexcept;
     WideTracer& operator=(WideTracer&&) noexcept;

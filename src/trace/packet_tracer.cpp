@@ -10,12 +10,13 @@ namespace spacebvh {
 struct PacketTracer::Impl {
     uint32_t packet_size;
     NodeTest test;
+    WideCollapse collapse;
     trace::WideLayout<8> layout;
     trace::SingleRayKernels single;
     trace::PacketKernels packets;
 };
 
-PacketTracer::PacketTracer(const Scene& scene, const Bvh& bvh, uint32_t packet_size, NodeTest test) {
+PacketTracer::PacketTracer(const Scene& scene, const Bvh& bvh, uint32_t packet_size, NodeTest test, WideCollapse collapse) {
     if (packet_size < 1 || packet_size > trace::kMaxPacket)
         throw Error("packet size must be in [1, " + std::to_string(trace::kMaxPacket) + "], got " + std::to_string(packet_size));
     if (test == NodeTest::best) test = supported_node_tests(8).back();
@@ -24,7 +25,8 @@ PacketTracer::PacketTracer(const Scene& scene, const Bvh& bvh, uint32_t packet_s
     impl_ = std::make_unique<Impl>();
     impl_->packet_size = packet_size;
     impl_->test = test;
-    impl_->layout = trace::collapse_to_wide<8>(scene, bvh);
+    impl_->collapse = collapse;
+    impl_->layout = trace::collapse_to_wide<8>(scene, bvh, collapse);
     impl_->single = trace::single_ray_kernels(8, test);
     impl_->packets = trace::packet_kernels(test);
 }
@@ -93,7 +95,7 @@ std::string PacketTracer::name() const {
     while ((tile + 1) * (tile + 1) <= impl_->packet_size) ++tile;
     std::string shape = std::to_string(tile);
     if (tile * tile != impl_->packet_size) shape = "-x" + std::to_string(impl_->packet_size);
-    return "packet" + shape + "-" + to_string(impl_->test);
+    return "packet" + shape + "-" + to_string(impl_->test) + collapse_suffix(impl_->collapse);
 }
 
 uint32_t PacketTracer::packet_size() const { return impl_->packet_size; }

@@ -23,6 +23,10 @@ std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
     triangles.clear();
     for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
         if (!scene_.triangles[bvh_.primitives[i]].is_degenerate()) triangles.push_back(bvh_.primitives[i]);
+    return add(std::span<const uint32_t>(triangles));
+}
+
+std::pair<uint32_t, uint32_t> LeafPacker::add(std::span<const uint32_t> triangles) {
     if (triangles.empty()) return {0, 0};
 
     if (open_lanes_ < 4) {

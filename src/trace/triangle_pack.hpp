@@ -8,6 +8,7 @@
 #include <immintrin.h>
 
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -44,6 +45,8 @@ public:
 
     // Returns {first pack, lane count}; {0, 0} when every triangle of the leaf is degenerate.
     std::pair<uint32_t, uint32_t> add(const BvhNode& leaf);
+    // The same for a leaf of these triangles (distinct; a merged subtree, wide_collapse.hpp).
+    std::pair<uint32_t, uint32_t> add(std::span<const uint32_t> triangles);
 
 private:
     void put(uint32_t primitive);

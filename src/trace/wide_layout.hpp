@@ -7,6 +7,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/scene.hpp"
 #include "trace/huge_page_allocator.hpp"
+#include "spacebvh/wide_tracer.hpp"
 #include "trace/triangle_pack.hpp"
 
 namespace spacebvh::trace {
@@ -30,15 +31,13 @@ struct WideLayout {
     TrianglePacks packs;
 };
 
-// Collapses the binary tree: each wide node takes its binary node's two children and repeatedly opens
-// the inner child of largest surface area (the one most rays enter, by the SAH's geometric
-// probability) until it has W children or only leaves. Nodes are laid out depth first, a node's first
-// inner child right after it. Degenerate triangles are dropped (never hit); a leaf of degenerate
-// triangles only gets an empty box.
+// Collapses the binary tree into wide nodes, choosing each node's children by `collapse`
+// (wide_collapse.hpp). Nodes are laid out depth first, a node's first inner child right after it.
+// Degenerate triangles are dropped (never hit); a leaf of degenerate triangles only gets an empty box.
 template <int W>
-WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh);
+WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh, WideCollapse collapse);
 
-extern template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&);
-extern template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&);
+extern template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&, WideCollapse);
+extern template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&, WideCollapse);
 
 }  // namespace spacebvh::trace

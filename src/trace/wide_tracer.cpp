@@ -23,6 +23,14 @@ const char* to_string(NodeTest test) {
     return "?";
 }
 
+const char* to_string(WideCollapse collapse) {
+    return collapse == WideCollapse::sah_optimal ? "sah" : "area";
+}
+
+std::string collapse_suffix(WideCollapse collapse) {
+    return collapse == WideCollapse::sah_optimal ? "" : std::string("@") + to_string(collapse);
+}
+
 std::vector<NodeTest> supported_node_tests(int width) {
     std::vector<NodeTest> tests;
     for (NodeTest test : {NodeTest::scalar, NodeTest::sse, NodeTest::avx2, NodeTest::avx512})
@@ -33,6 +41,7 @@ std::vector<NodeTest> supported_node_tests(int width) {
 struct WideTracer::Impl {
     int width;
     NodeTest test;
+    WideCollapse collapse;
     std::variant<trace::WideLayout<4>, trace::WideLayout<8>> layout;
     trace::SingleRayKernels kernels;
 
@@ -41,7 +50,7 @@ struct WideTracer::Impl {
     }
 };
 
-WideTracer::WideTracer(const Scene& scene, const Bvh& bvh, int width, NodeTest test) {
+WideTracer::WideTracer(const Scene& scene, const Bvh& bvh, int width, NodeTest test, WideCollapse collapse) {
     if (width != 4 && width != 8) throw Error("wide BVH width must be 4 or 8, got " + std::to_string(width));
     if (test == NodeTest::best) test = supported_node_tests(width).back();
     if (!trace::width_has(width, test))
@@ -50,10 +59,11 @@ WideTracer::WideTracer(const Scene& scene, const Bvh& bvh, int width, NodeTest t
     impl_ = std::make_unique<Impl>();
     impl_->width = width;
     impl_->test = test;
+    impl_->collapse = collapse;
     if (width == 4)
-        impl_->layout.emplace<0>(trace::collapse_to_wide<4>(scene, bvh));
+        impl_->layout.emplace<0>(trace::collapse_to_wide<4>(scene, bvh, collapse));
     else
-        impl_->layout.emplace<1>(trace::collapse_to_wide<8>(scene, bvh));
+        impl_->layout.emplace<1>(trace::collapse_to_wide<8>(scene, bvh, collapse));
     impl_->kernels = trace::single_ray_kernels(width, test);
 }
 
@@ -113,29 +123,44 @@ size_t WideTracer::node_count() const {
     return std::visit([](const auto& layout) { return layout.nodes.size(); }, impl_->layout);
 }
 
-std::string WideTracer::name() const { return "bvh" + std::to_string(impl_->width) + "-" + to_string(impl_->test); }
+std::string WideTracer::name() const {
+    return "bvh" + std::to_string(impl_->width) + "-" + to_string(impl_->test) + collapse_suffix(impl_->collapse);
+}
 int WideTracer::width() const { return impl_->width; }
 NodeTest WideTracer::node_test() const { return impl_->test; }
 
-std::unique_ptr<Tracer> make_tracer(const std::string& kernel, const Scene& scene, const Bvh& bvh) {
+std::unique_ptr<Tracer> make_tracer(const std::string& name, const Scene& scene, const Bvh& bvh) {
+    // A wide kernel may end in "@area": Embree's collapse instead of the SAH-optimal one.
+    std::string kernel = name;
+    WideCollapse collapse = WideCollapse::sah_optimal;
+    if (const size_t at = kernel.find('@'); at != std::string::npos) {
+        const std::string suffix = kernel.substr(at + 1);
+        kernel.resize(at);
+        if (suffix == "area" && kernel != "binary") {
+            collapse = WideCollapse::largest_area;
+        } else if (suffix != "sah" || kernel == "binary") {
+            throw Error("unknown kernel '" + name + "': only wide kernels take a collapse, @sah or @area");
+        }
+    }
     if (kernel == "binary") return std::make_unique<BinaryTracer>(scene, bvh);
     // The fastest single-ray kernel measured (bench/RESULTS.md): 8 wide with the widest node test.
-    if (kernel == "auto") return std::make_unique<WideTracer>(scene, bvh, 8);
+    if (kernel == "auto") return std::make_unique<WideTracer>(scene, bvh, 8, NodeTest::best, collapse);
     for (int width : {4, 8}) {
         const std::string prefix = "bvh" + std::to_string(width);
-        if (kernel == prefix) return std::make_unique<WideTracer>(scene, bvh, width);
+        if (kernel == prefix) return std::make_unique<WideTracer>(scene, bvh, width, NodeTest::best, collapse);
         for (NodeTest test : {NodeTest::scalar, NodeTest::sse, NodeTest::avx2, NodeTest::avx512})
-            if (kernel == prefix + "-" + to_string(test)) return std::make_unique<WideTracer>(scene, bvh, width, test);
+            if (kernel == prefix + "-" + to_string(test)) return std::make_unique<WideTracer>(scene, bvh, width, test, collapse);
     }
     for (uint32_t tile : {8u, 16u}) {
         const std::string prefix = "packet" + std::to_string(tile);
-        if (kernel == prefix) return std::make_unique<PacketTracer>(scene, bvh, tile * tile);
+        if (kernel == prefix) return std::make_unique<PacketTracer>(scene, bvh, tile * tile, NodeTest::best, collapse);
         for (NodeTest test : {NodeTest::scalar, NodeTest::avx2, NodeTest::avx512})
-            if (kernel == prefix + "-" + to_string(test)) return std::make_unique<PacketTracer>(scene, bvh, tile * tile, test);
+            if (kernel == prefix + "-" + to_string(test))
+                return std::make_unique<PacketTracer>(scene, bvh, tile * tile, test, collapse);
     }
     std::string known;
-    for (const std::string& name : kernel_names()) known += " " + name;
-    throw Error("unknown kernel '" + kernel + "'; kernels on this CPU:" + known);
+    for (const std::string& known_name : kernel_names()) known += " " + known_name;
+    throw Error("unknown kernel '" + name + "'; kernels on this CPU:" + known + " (wide ones also NAME@area)");
 }
 
 std::vector<std::string> kernel_names() {
