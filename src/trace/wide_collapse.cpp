@@ -1,6 +1,7 @@
 #include "trace/wide_collapse.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <limits>
 
 namespace spacebvh::trace {
