@@ -21,8 +21,7 @@ void LeafPacker::put(uint32_t primitive) {
 std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
     std::vector<uint32_t>& triangles = triangles_;
     triangles.clear();
-    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
-        if (!scene_.triangles[bvh_.primitives[i]].is_degenerate()) triangles.push_back(bvh_.primitives[i]);
+    append_live_triangles(scene_, bvh_, leaf, triangles);
     return add(std::span<const uint32_t>(triangles));
 }
 

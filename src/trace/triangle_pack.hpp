@@ -29,6 +29,13 @@ static_assert(sizeof(TrianglePack) == 160);
 
 using TrianglePacks = std::vector<TrianglePack, HugePageAllocator<TrianglePack>>;
 
+// Appends the non-degenerate triangles of binary leaf `leaf` (degenerate ones are never hit, so no
+// layout stores them).
+inline void append_live_triangles(const Scene& scene, const Bvh& bvh, const BvhNode& leaf, std::vector<uint32_t>& out) {
+    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
+        if (!scene.triangles[bvh.primitives[i]].is_degenerate()) out.push_back(bvh.primitives[i]);
+}
+
 // Lays out the triangles of leaves, in the order the layout visits them, into shared packs. A kernel
 // tests a leaf as {first pack, lane count}: lanes 0 .. count-1 of packs first, first + 1, ...
 //

@@ -4,6 +4,8 @@
 #include <iterator>
 #include <limits>
 
+#include "trace/triangle_pack.hpp"
+
 namespace spacebvh::trace {
 namespace {
 
@@ -24,11 +26,6 @@ std::vector<uint32_t> children_first_order(const Bvh& bvh) {
     return order;
 }
 
-void leaf_triangles(const Scene& scene, const Bvh& bvh, const BvhNode& leaf, std::vector<uint32_t>& out) {
-    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
-        if (!scene.triangles[bvh.primitives[i]].is_degenerate()) out.push_back(bvh.primitives[i]);
-}
-
 void sort_unique(std::vector<uint32_t>& values) {
     std::sort(values.begin(), values.end());
     values.erase(std::unique(values.begin(), values.end()), values.end());
@@ -42,7 +39,7 @@ std::vector<uint32_t> subtree_triangles(const Scene& scene, const Bvh& bvh, uint
         const BvhNode& n = bvh.nodes[stack.back()];
         stack.pop_back();
         if (n.is_leaf()) {
-            leaf_triangles(scene, bvh, n, triangles);
+            append_live_triangles(scene, bvh, n, triangles);
         } else {
             stack.push_back(n.first + 1);
             stack.push_back(n.first);
@@ -65,7 +62,7 @@ CollapsePlan::CollapsePlan(const Scene& scene, const Bvh& bvh, int width, WideCo
         const BvhNode& n = bvh.nodes[node];
         std::vector<uint32_t>& set = sets[node];
         if (n.is_leaf()) {
-            leaf_triangles(scene, bvh, n, set);
+            append_live_triangles(scene, bvh, n, set);
             sort_unique(set);
             distinct_[node] = uint32_t(set.size());  // exact for a leaf: it stays a leaf whatever its size
         } else {
