@@ -108,11 +108,12 @@ template <int W>
 // Starts fetching a child the ray will visit soon: an inner node's four lines, or the first triangle
 // pack of a leaf (three lines); traversal is bound by the latency of these fetches.
 template <int W>
-[[gnu::always_inline]] inline void prefetch_child(const WideLayout<W>& layout, uint32_t child, uint32_t count) {
+[[gnu::always_inline]] inline void prefetch_child(const WideNode<W>* nodes, const TrianglePack* packs, uint32_t child,
+                                                  uint32_t count) {
     if (count == 0) {
-        prefetch_node(layout.nodes[child]);
+        prefetch_node(nodes[child]);
     } else {
-        prefetch_pack(layout.packs[child]);
+        prefetch_pack(packs[child]);
     }
 }
 
@@ -123,6 +124,12 @@ template <class S, bool kAnyHit, bool kStats>
 bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     const RayBoxes<S> boxes(ray);
+    // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and loaded
+    // them from memory at every node (closest hits, bvh8, 1 thread: bunny random 1.05x, Sponza
+    // random 1.03x and diffuse 1.04x; occlusion unchanged).
+    const WideNode<W>* const nodes = layout.nodes.data();
+    const TrianglePack* const packs = layout.packs.data();
+    const float tmin = ray.tmin;
     // The triangle test's per-ray constants (three divisions) are made when the ray reaches its first
     // leaf: many rays never do (bunny, random rays: 1.08-1.11x from this alone).
     WatertightRay shear;
@@ -138,15 +145,15 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
     // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
     Entry stack[(W - 1) * 1024 + 1];
     int top = 0;
-    Entry current{0, 0, ray.tmin};
+    Entry current{0, 0, tmin};
 
     while (true) {
         if (current.count == 0) {
-            const WideNode<W>& node = layout.nodes[current.child];
+            const WideNode<W>& node = nodes[current.child];
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.planes[0][slot] <= node.planes[1][slot];
             typename S::F near;
-            unsigned mask = child_hit_mask<S>(node, boxes, ray.tmin, tmax, near);
+            unsigned mask = child_hit_mask<S>(node, boxes, tmin, tmax, near);
             if (mask != 0) {
                 // As Embree's single-ray traversal does: the entered children straight from the mask;
                 // for the closest hit, one is followed at once (most nodes enter one), two are compared
@@ -169,15 +176,15 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                         stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
                     }
                     current = {node.child[farthest], node.count[farthest], entry[farthest]};
-                    prefetch_child(layout, current.child, current.count);
-                    if (top > 0) prefetch_child(layout, stack[top - 1].child, stack[top - 1].count);
+                    prefetch_child(nodes, packs, current.child, current.count);
+                    if (top > 0) prefetch_child(nodes, packs, stack[top - 1].child, stack[top - 1].count);
                     continue;
                 }
                 const uint32_t first = uint32_t(__builtin_ctz(mask));
                 mask &= mask - 1;
                 if (mask == 0) {
                     current = {node.child[first], node.count[first], entry[first]};
-                    prefetch_child(layout, current.child, current.count);
+                    prefetch_child(nodes, packs, current.child, current.count);
                     continue;
                 }
                 const uint32_t second = uint32_t(__builtin_ctz(mask));
@@ -223,9 +230,9 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                     }
                     current = stack[--top];
                 }
-                prefetch_child(layout, current.child, current.count);
+                prefetch_child(nodes, packs, current.child, current.count);
                 // The next pop is likely soon: fetch it too.
-                prefetch_child(layout, stack[top - 1].child, stack[top - 1].count);
+                prefetch_child(nodes, packs, stack[top - 1].child, stack[top - 1].count);
                 continue;
             }
         } else {
@@ -234,7 +241,8 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 pack_ray = PackRay(shear);
                 sheared = true;
             }
-            if (test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, ray, shear, pack_ray, tmax, hit, found, stats))
+            if (test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax,
+                                                                     hit, found, stats))
                 return true;
         }
         // Pop the nearest pending subtree that may still hold a closer hit.
