@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
@@ -675,6 +676,47 @@ TEST(SharedScenes, CrytekSponzaAndItsRotatedVariant) {
     EXPECT_EQ(camera.target, rotation.apply(Vec3(0, 35, -4)));
     EXPECT_EQ(camera.up, rotation.apply(Vec3(0, 1, 0)));
     EXPECT_EQ(camera.fovy_degrees, 60.0f);
+}
+
+TEST(IndexedScene, BuildsTrianglesInIndexOrderAndCountsDegenerates) {
+    const std::vector<float> vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 2, 2};
+    const std::vector<int64_t> indices = {0, 1, 2, 3, 2, 1, 0, 0, 3};  // the last one has a repeated vertex
+    const Scene scene = make_indexed_scene(vertices, indices, "mesh");
+    ASSERT_EQ(scene.triangles.size(), 3u);
+    EXPECT_EQ(scene.triangles[1].v0, Vec3(2, 2, 2));
+    EXPECT_EQ(scene.triangles[1].v1, Vec3(0, 1, 0));
+    EXPECT_EQ(scene.triangles[1].v2, Vec3(1, 0, 0));
+    EXPECT_EQ(scene.degenerate_count, 1u);
+    EXPECT_EQ(scene.name, "mesh");
+}
+
+TEST(IndexedScene, RejectsBadArraysNamingTheElement) {
+    const std::vector<float> vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    auto message = [](auto&& call) {
+        try {
+            call();
+        } catch (const Error& error) {
+            return std::string(error.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message([&] { make_indexed_scene(vertices, std::vector<int64_t>{0, 1, 3}, "m"); }).find("triangle 0 uses vertex 3"),
+              std::string::npos);
+    EXPECT_NE(message([&] { make_indexed_scene(vertices, std::vector<int64_t>{0, -1, 2}, "m"); }).find("vertex -1"),
+              std::string::npos);
+    EXPECT_NE(message([&] { make_indexed_scene(vertices, std::vector<int64_t>{}, "m"); }).find("no triangles"), std::string::npos);
+    EXPECT_NE(message([&] { make_indexed_scene(vertices, std::vector<int64_t>{0, 1}, "m"); }).find("not a multiple of 3"),
+              std::string::npos);
+    EXPECT_NE(message([&] { make_indexed_scene(std::vector<float>{0, 0}, std::vector<int64_t>{0, 0, 0}, "m"); })
+                  .find("not a multiple of 3"),
+              std::string::npos);
+    std::vector<float> nan_vertices = vertices;
+    nan_vertices[4] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NE(message([&] { make_indexed_scene(nan_vertices, std::vector<int64_t>{0, 1, 2}, "m"); }).find("vertex 1"),
+              std::string::npos);
+    nan_vertices[4] = std::numeric_limits<float>::infinity();
+    EXPECT_NE(message([&] { make_indexed_scene(nan_vertices, std::vector<int64_t>{0, 1, 2}, "m"); }).find("not finite"),
+              std::string::npos);
 }
 
 TEST(SharedScenes, AllScenesMatchManifestCounts) {

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -48,6 +50,12 @@ struct Scene {
 // Throws Error naming the file and line/element for malformed, truncated or invalid input
 // (NaN/inf coordinates, out-of-range or negative indices, empty meshes, unknown formats).
 Scene load_scene(const std::string& source, const SceneTransform& transform = {});
+
+// A scene from an indexed triangle mesh in memory (the Python module's numpy arrays): `vertices` holds
+// x, y, z per vertex, `indices` three vertex indices per triangle (0-based). Throws Error naming the
+// vertex or triangle for a length that is not a multiple of 3, an empty mesh, a NaN/inf coordinate
+// or an index out of range.
+Scene make_indexed_scene(std::span<const float> vertices, std::span<const int64_t> indices, const std::string& name);
 
 // Names accepted after `builtin:`.
 std::vector<std::string> builtin_scene_names();

@@ -2,7 +2,9 @@
 // degenerate triangles and names the scene.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "scene/scene_internal.hpp"
 
@@ -90,6 +92,32 @@ Scene load_scene(const std::string& source, const SceneTransform& transform) {
         scene.name += transform_suffix(transform);
     }
     // Counted after the transform: rounding can make a sliver exactly flat (or not).
+    scene.degenerate_count = scene_detail::count_degenerate(scene.triangles);
+    return scene;
+}
+
+Scene make_indexed_scene(std::span<const float> vertices, std::span<const int64_t> indices, const std::string& name) {
+    const std::string what = "mesh '" + name + "'";
+    if (vertices.size() % 3 != 0)
+        throw Error(what + ": " + std::to_string(vertices.size()) + " vertex coordinates, not a multiple of 3");
+    if (indices.size() % 3 != 0)
+        throw Error(what + ": " + std::to_string(indices.size()) + " indices, not a multiple of 3");
+    if (indices.empty()) throw Error(what + ": no triangles");
+    const size_t vertex_count = vertices.size() / 3;
+    for (size_t i = 0; i < vertices.size(); ++i)
+        if (!std::isfinite(vertices[i]))
+            throw Error(what + ": vertex " + std::to_string(i / 3) + " has a coordinate that is not finite");
+    auto vertex = [&](size_t triangle, int corner) {
+        const int64_t index = indices[3 * triangle + corner];
+        if (index < 0 || uint64_t(index) >= vertex_count)
+            throw Error(what + ": triangle " + std::to_string(triangle) + " uses vertex " + std::to_string(index) +
+                        ", outside 0.." + std::to_string(int64_t(vertex_count) - 1));
+        return Vec3{vertices[3 * index], vertices[3 * index + 1], vertices[3 * index + 2]};
+    };
+    Scene scene;
+    scene.name = name;
+    scene.triangles.reserve(indices.size() / 3);
+    for (size_t t = 0; t < indices.size() / 3; ++t) scene.triangles.push_back({vertex(t, 0), vertex(t, 1), vertex(t, 2)});
     scene.degenerate_count = scene_detail::count_degenerate(scene.triangles);
     return scene;
 }

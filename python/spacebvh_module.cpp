@@ -1,0 +1,263 @@
+// The Python module `spacebvh`: scenes from files or numpy arrays, the named builders, tree metrics,
+// and the tracers on numpy ray arrays. A thin layer over the C++ API: every check and every answer
+// is the library's (errors become spacebvh.Error, a RuntimeError, with the library's message).
+// Builds and traces release the GIL and use oneTBB, `threads` at most (0 = all cores).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/metrics.hpp"
+#include "spacebvh/rays.hpp"
+#include "spacebvh/scene.hpp"
+#include "spacebvh/tracer.hpp"
+
+namespace py = pybind11;
+using namespace spacebvh;
+
+namespace {
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using IndexArray = py::array_t<int64_t, py::array::c_style | py::array::forcecast>;
+
+// Runs `work` in an arena of `threads` oneTBB threads (0: the default, every core).
+template <typename Work>
+void in_arena(int threads, Work&& work) {
+    if (threads < 0) throw Error("threads must be >= 0 (0 = every core), not " + std::to_string(threads));
+    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : threads);
+    arena.execute(work);
+}
+
+// An (n, 3) float array as a flat span, or Error naming the argument.
+std::span<const float> rows_of_three(const FloatArray& array, const char* what) {
+    if (array.ndim() != 2 || array.shape(1) != 3)
+        throw Error(std::string(what) + " must have shape (n, 3), not " + std::to_string(array.ndim()) + " dimensions" +
+                    (array.ndim() == 2 ? " of width " + std::to_string(array.shape(1)) : std::string()));
+    return {array.data(), size_t(array.size())};
+}
+
+// Rays from (n, 3) origins and directions and scalar or per-ray tmin/tmax; checked as ray files are
+// (finite origin, non-zero finite direction, 0 <= tmin <= tmax), naming the first bad ray.
+std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directions, float tmin, float tmax) {
+    const std::span<const float> o = rows_of_three(origins, "origins"), d = rows_of_three(directions, "directions");
+    if (o.size() != d.size())
+        throw Error("origins and directions differ in length: " + std::to_string(o.size() / 3) + " and " +
+                    std::to_string(d.size() / 3));
+    if (!(tmin >= 0.0f) || !(tmax >= tmin) || std::isnan(tmax))
+        throw Error("need 0 <= tmin <= tmax, not tmin = " + std::to_string(tmin) + ", tmax = " + std::to_string(tmax));
+    std::vector<Ray> rays(o.size() / 3);
+    for (size_t i = 0; i < rays.size(); ++i) {
+        Ray& ray = rays[i];
+        ray.org = {o[3 * i], o[3 * i + 1], o[3 * i + 2]};
+        ray.dir = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
+        ray.tmin = tmin;
+        ray.tmax = tmax;
+        if (!is_finite(ray.org) || !is_finite(ray.dir) || ray.dir == Vec3(0.0f))
+            throw Error("ray " + std::to_string(i) + ": the origin must be finite and the direction finite and non-zero");
+    }
+    return rays;
+}
+
+// A tree with the scene it was built over (a tracer needs both; the scene is kept alive).
+struct PyBvh {
+    std::shared_ptr<Scene> scene;
+    std::shared_ptr<const Bvh> bvh;
+};
+
+struct PyTracer {
+    std::shared_ptr<Scene> scene;
+    std::shared_ptr<const Bvh> bvh;
+    std::unique_ptr<Tracer> tracer;
+    int threads = 0;
+};
+
+PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optional<float> overlap_penalty,
+            float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
+            float reference_budget, uint32_t optimize, int threads) {
+    BuildOptions options = options_for(builder);
+    if (overlap_penalty) options.cost.overlap_penalty = *overlap_penalty;
+    options.cost.traversal_cost = traversal_cost;
+    options.cost.intersection_cost = intersection_cost;
+    options.cost.leaf_block = leaf_block;
+    options.max_leaf_size = max_leaf_size;
+    options.reference_budget = reference_budget;
+    options.reinsertion_iterations = optimize;
+    options.validate();
+    auto bvh = std::make_shared<Bvh>();
+    {
+        py::gil_scoped_release unlocked;
+        in_arena(threads, [&] { *bvh = build_bvh(*scene, options); });
+    }
+    return {std::move(scene), std::move(bvh)};
+}
+
+py::dict stats_of(const PyBvh& tree, bool with_epo) {
+    TreeStats stats;
+    {
+        py::gil_scoped_release unlocked;
+        stats = compute_tree_stats(*tree.scene, *tree.bvh, tree.bvh->cost, with_epo);
+    }
+    py::dict result;
+    result["nodes"] = stats.nodes;
+    result["inner_nodes"] = stats.inner_nodes;
+    result["leaves"] = stats.leaves;
+    result["max_depth"] = stats.max_depth;
+    result["mean_leaf_depth"] = stats.mean_leaf_depth;
+    result["references"] = stats.references;
+    result["distinct_primitives"] = stats.distinct_primitives;
+    result["bytes"] = stats.bytes;
+    result["sah"] = stats.sah;
+    if (with_epo) result["epo"] = stats.epo;
+    return result;
+}
+
+// Closest hits: (t, primitive, u, v) arrays; a miss has t = inf and primitive = -1.
+py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, float tmin, float tmax) {
+    const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
+    std::vector<Hit> hits(rays.size());
+    {
+        py::gil_scoped_release unlocked;
+        in_arena(self.threads, [&] { self.tracer->intersect(rays, hits); });
+    }
+    const py::ssize_t n = py::ssize_t(rays.size());
+    py::array_t<float> t(n), u(n), v(n);
+    py::array_t<int64_t> primitive(n);
+    float* t_out = t.mutable_data();
+    float* u_out = u.mutable_data();
+    float* v_out = v.mutable_data();
+    int64_t* primitive_out = primitive.mutable_data();
+    for (size_t i = 0; i < hits.size(); ++i) {
+        const Hit& hit = hits[i];
+        t_out[i] = hit.t;
+        primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
+        u_out[i] = hit.u;
+        v_out[i] = hit.v;
+    }
+    return py::make_tuple(t, primitive, u, v);
+}
+
+py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, float tmin,
+                           float tmax) {
+    const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
+    std::vector<uint8_t> answers(rays.size());
+    {
+        py::gil_scoped_release unlocked;
+        in_arena(self.threads, [&] { self.tracer->occluded(rays, answers); });
+    }
+    py::array_t<bool> result(py::ssize_t(rays.size()));
+    auto out = result.mutable_unchecked<1>();
+    for (size_t i = 0; i < answers.size(); ++i) out(py::ssize_t(i)) = answers[i] != 0;
+    return result;
+}
+
+py::tuple rays_as_arrays(const std::vector<Ray>& rays) {
+    const py::ssize_t n = py::ssize_t(rays.size());
+    py::array_t<float> origins({n, py::ssize_t(3)}), directions({n, py::ssize_t(3)});
+    auto o = origins.mutable_unchecked<2>(), d = directions.mutable_unchecked<2>();
+    for (py::ssize_t i = 0; i < n; ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+            o(i, axis) = rays[size_t(i)].org[axis];
+            d(i, axis) = rays[size_t(i)].dir[axis];
+        }
+    return py::make_tuple(origins, directions);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(spacebvh, m) {
+    m.doc() = "spacebvh: BVHs built by space subdivision (Popov et al. 2009), their metrics and exact tracers";
+#if PYBIND11_VERSION_MAJOR == 2 && PYBIND11_VERSION_MINOR < 12
+    // pybind11 before 2.12 reads NumPy 1's array structures: under NumPy 2 its arrays come back with
+    // wrong contents (every answer a miss), so refuse to load rather than answer wrongly.
+    const std::string numpy_version = py::module_::import("numpy").attr("__version__").cast<std::string>();
+    if (numpy_version.empty() || numpy_version[0] != '1')
+        throw py::import_error("spacebvh was built with pybind11 " + std::to_string(PYBIND11_VERSION_MAJOR) + "." +
+                               std::to_string(PYBIND11_VERSION_MINOR) + ", which does not support NumPy " + numpy_version +
+                               ": install numpy<2 (scripts/install-deps.sh does) or build with pybind11 >= 2.12");
+#endif
+    static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+    py::register_exception_translator([](std::exception_ptr pointer) {
+        try {
+            if (pointer) std::rethrow_exception(pointer);
+        } catch (const Error& e) {
+            error(e.what());
+        }
+    });
+
+    py::class_<Scene, std::shared_ptr<Scene>>(m, "Scene", "Triangles in file (or index) order; degenerate ones are kept and never hit.")
+        .def_property_readonly("name", [](const Scene& s) { return s.name; })
+        .def_property_readonly("triangle_count", [](const Scene& s) { return s.triangles.size(); })
+        .def_property_readonly("degenerate_count", [](const Scene& s) { return s.degenerate_count; })
+        .def_property_readonly("bounds",
+                               [](const Scene& s) {
+                                   const AABB box = s.bounds();
+                                   return py::make_tuple(py::make_tuple(box.lo.x, box.lo.y, box.lo.z),
+                                                         py::make_tuple(box.hi.x, box.hi.y, box.hi.z));
+                               })
+        .def("__repr__", [](const Scene& s) {
+            return "<spacebvh.Scene '" + s.name + "', " + std::to_string(s.triangles.size()) + " triangles>";
+        });
+
+    m.def(
+        "load_scene", [](const std::string& source) { return std::make_shared<Scene>(load_scene(source)); }, py::arg("source"),
+        "Loads .obj, .ply, .gltf or .glb, or builtin:NAME (see builtin_scenes()).");
+    m.def(
+        "mesh",
+        [](const FloatArray& vertices, const IndexArray& indices, const std::string& name) {
+            const std::span<const float> v = rows_of_three(vertices, "vertices");
+            if (indices.ndim() != 2 || indices.shape(1) != 3) throw Error("indices must have shape (n, 3)");
+            return std::make_shared<Scene>(
+                make_indexed_scene(v, std::span<const int64_t>(indices.data(), size_t(indices.size())), name));
+        },
+        py::arg("vertices"), py::arg("indices"), py::arg("name") = "mesh",
+        "A scene from an indexed mesh: vertices (n, 3) floats, indices (m, 3) 0-based vertex indices.");
+    m.def("builtin_scenes", &builtin_scene_names);
+    m.def("builders", &builder_names);
+    m.def("kernels", &kernel_names);
+
+    py::class_<PyBvh>(m, "Bvh", "A binary BVH and the scene it was built over.")
+        .def_property_readonly("builder", [](const PyBvh& t) { return t.bvh->builder; })
+        .def_property_readonly("cost_model", [](const PyBvh& t) { return t.bvh->cost.describe(); })
+        .def_property_readonly("node_count", [](const PyBvh& t) { return t.bvh->nodes.size(); })
+        .def_property_readonly("reference_count", [](const PyBvh& t) { return t.bvh->primitives.size(); })
+        .def_property_readonly("sah", [](const PyBvh& t) { return tree_sah(*t.bvh, t.bvh->cost); })
+        .def("stats", &stats_of, py::arg("epo") = false,
+             "Structure, memory and tree SAH (and EPO, the slow one, with epo=True) as a dict.");
+
+    m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
+          py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,
+          py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u, py::arg("reference_budget") = 1.3f,
+          py::arg("optimize") = 0u, py::arg("threads") = 0,
+          "Builds a BVH with a named builder (builders()); overlap_penalty defaults to the builder's own C_o "
+          "(float('inf'): disjoint children only); optimize = reinsertion iterations (0 = off, 16 = the CLI's --optimize). "
+          "Deterministic whatever `threads`.");
+
+    py::class_<PyTracer>(m, "Tracer", "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.")
+        .def(py::init([](const PyBvh& tree, const std::string& kernel, int threads) {
+                 auto tracer = make_tracer(kernel, *tree.scene, *tree.bvh);
+                 return PyTracer{tree.scene, tree.bvh, std::move(tracer), threads};
+             }),
+             py::arg("bvh"), py::arg("kernel") = "auto", py::arg("threads") = 0)
+        .def_property_readonly("kernel", [](const PyTracer& self) { return self.tracer->name(); })
+        .def_property_readonly("memory_bytes", [](const PyTracer& self) { return self.tracer->memory_bytes(); })
+        .def("intersect", &closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
+             py::arg("tmax") = kInfinity, "Closest hits: arrays t, primitive (-1 on a miss), u, v.")
+        .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
+             py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax]: a bool array.");
+
+    m.def(
+        "random_rays",
+        [](const Scene& scene, size_t count, uint64_t seed) { return rays_as_arrays(generate_random_rays(scene.bounds(), count, seed)); },
+        py::arg("scene"), py::arg("count"), py::arg("seed") = 1,
+        "The random rays of ../shared/spec/rays.md: (origins, directions) arrays.");
+}

@@ -1,0 +1,171 @@
+"""Tests of the Python module against an independent NumPy brute force (double-precision
+Moller-Trumbore over every triangle). Run by CTest (`python_module`) with the built module on
+PYTHONPATH: python3 python/test_spacebvh.py"""
+import math
+import unittest
+
+import numpy as np
+
+import spacebvh
+
+# Rays whose NumPy answer is decided by less than this (barycentric margin or relative t gap to the
+# next candidate) are left out of the comparison: there float rounding of the brute force itself,
+# not our exact arbiter, would decide.
+MARGIN = 1e-6
+
+
+def brute_force(vertices, origins, directions, tmin, tmax):
+    """Closest hit per ray, in double: (t, primitive, decided). `decided` is False where the hit
+    or miss is too close to call (near an edge, or two hits at almost the same distance)."""
+    v0, v1, v2 = (vertices[:, k, :].astype(np.float64) for k in range(3))
+    e1, e2 = v1 - v0, v2 - v0
+    n_rays = origins.shape[0]
+    best_t = np.full(n_rays, np.inf)
+    best_prim = np.full(n_rays, -1, dtype=np.int64)
+    decided = np.ones(n_rays, dtype=bool)
+    for i in range(n_rays):
+        o = origins[i].astype(np.float64)
+        d = directions[i].astype(np.float64)
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        valid = np.abs(det) > 1e-30
+        inv = np.where(valid, 1.0 / np.where(valid, det, 1.0), 0.0)
+        s = o - v0
+        u = np.einsum("ij,ij->i", s, p) * inv
+        q = np.cross(s, e1)
+        v = (q @ d) * inv
+        t = np.einsum("ij,ij->i", e2, q) * inv
+        w = 1.0 - u - v
+        inside = valid & (u >= 0) & (v >= 0) & (w >= 0) & (t >= tmin) & (t <= tmax)
+        near_edge = valid & (np.minimum(np.minimum(u, v), w) > -MARGIN) & (np.minimum(np.minimum(u, v), w) < MARGIN)
+        near_range = valid & (np.abs(t - tmin) <= MARGIN * (1 + abs(tmin)))
+        if math.isfinite(tmax):
+            near_range |= valid & (np.abs(t - tmax) <= MARGIN * (1 + abs(tmax)))
+        # Within range of the candidates: anything near an edge or the ends makes the ray undecided.
+        if np.any((near_edge | near_range) & (t >= tmin - MARGIN) & (t <= tmax + MARGIN)):
+            decided[i] = False
+        if np.any(inside):
+            ts = np.where(inside, t, np.inf)
+            order = np.argsort(ts, kind="stable")
+            best_t[i] = ts[order[0]]
+            best_prim[i] = order[0]
+            if np.count_nonzero(inside) > 1 and ts[order[1]] - ts[order[0]] <= MARGIN * max(1.0, ts[order[0]]):
+                decided[i] = False  # two hits at nearly the same distance: either is right
+    return best_t, best_prim, decided
+
+
+def triangles_of(vertices, indices):
+    return vertices[indices]
+
+
+class SceneTests(unittest.TestCase):
+    def test_builtin_scenes_load(self):
+        names = spacebvh.builtin_scenes()
+        self.assertIn("interior", names)
+        scene = spacebvh.load_scene("builtin:organic")
+        self.assertGreater(scene.triangle_count, 0)
+        lo, hi = scene.bounds
+        self.assertTrue(all(l <= h for l, h in zip(lo, hi)))
+
+    def test_mesh_from_arrays_and_bad_input(self):
+        vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
+        scene = spacebvh.mesh(vertices, np.array([[0, 1, 2], [0, 0, 1]]))
+        self.assertEqual(scene.triangle_count, 2)
+        self.assertEqual(scene.degenerate_count, 1)
+        with self.assertRaisesRegex(spacebvh.Error, "triangle 0 uses vertex 3"):
+            spacebvh.mesh(vertices, np.array([[0, 1, 3]]))
+        with self.assertRaisesRegex(spacebvh.Error, "no triangles"):
+            spacebvh.mesh(vertices, np.zeros((0, 3), dtype=np.int64))
+        bad = vertices.copy()
+        bad[1, 2] = np.nan
+        with self.assertRaisesRegex(spacebvh.Error, "vertex 1"):
+            spacebvh.mesh(bad, np.array([[0, 1, 2]]))
+        with self.assertRaisesRegex(spacebvh.Error, r"shape \(n, 3\)"):
+            spacebvh.mesh(vertices.reshape(-1), np.array([[0, 1, 2]]))
+        with self.assertRaisesRegex(spacebvh.Error, "unknown builder"):
+            spacebvh.build(scene, "no-such-builder")
+        with self.assertRaises(spacebvh.Error):
+            spacebvh.build(scene, "binned", max_leaf_size=0)
+        with self.assertRaises(spacebvh.Error):
+            spacebvh.load_scene("/no/such/file.obj")
+
+
+class TracingTests(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        # A random soup of 400 triangles: small enough for the NumPy brute force over every pair.
+        rng = np.random.default_rng(7)
+        centers = rng.uniform(-1, 1, size=(400, 1, 3))
+        cls.vertices = (centers + rng.normal(scale=0.15, size=(400, 3, 3))).astype(np.float32)
+        flat = cls.vertices.reshape(-1, 3)
+        cls.scene = spacebvh.mesh(flat, np.arange(flat.shape[0]).reshape(-1, 3), "soup400")
+        cls.origins, cls.directions = spacebvh.random_rays(cls.scene, 1500, seed=3)
+        cls.expected_t, cls.expected_prim, cls.decided = brute_force(
+            cls.vertices, cls.origins, cls.directions, 0.0, math.inf)
+        # The comparison must be about something: most rays decided, many of them hits.
+        assert cls.decided.mean() > 0.9
+        assert np.count_nonzero(cls.expected_prim[cls.decided] >= 0) > 200
+
+    def check_against_brute_force(self, tracer):
+        t, prim, u, v = tracer.intersect(self.origins, self.directions)
+        d = self.decided
+        np.testing.assert_array_equal(prim[d], self.expected_prim[d], err_msg=tracer.kernel)
+        hit = d & (self.expected_prim >= 0)
+        np.testing.assert_allclose(t[hit], self.expected_t[hit], rtol=1e-5, err_msg=tracer.kernel)
+        self.assertTrue(np.all(np.isinf(t[prim < 0])))
+        self.assertTrue(np.all((u[prim >= 0] >= -1e-6) & (v[prim >= 0] >= -1e-6) & (u[prim >= 0] + v[prim >= 0] <= 1 + 1e-5)))
+        # Occlusion within [0, tmax]: blocked exactly where the closest hit lies within it.
+        blocked = tracer.occluded(self.origins, self.directions, 0.0, 1.0)
+        clear = d & (np.abs(self.expected_t - 1.0) > 1e-5)  # no hit too close to tmax to call
+        np.testing.assert_array_equal(blocked[clear], (self.expected_t <= 1.0)[clear], err_msg=tracer.kernel)
+        # Every ray with a closest hit is occluded over [0, inf).
+        self.assertTrue(np.all(tracer.occluded(self.origins[prim >= 0], self.directions[prim >= 0], 0.0, math.inf)))
+
+    def test_every_builder_and_kernel_equals_brute_force(self):
+        kernels = [k for k in ("binary", "bvh4", "bvh8", "packet8") if k in spacebvh.kernels()]
+        self.assertIn("binary", kernels)
+        for builder in ("cbvh", "binned", "kdbvh", "spatial", "sbvh", "esc", "evh"):
+            bvh = spacebvh.build(self.scene, builder)
+            self.assertGreaterEqual(bvh.reference_count, self.scene.triangle_count - self.scene.degenerate_count)
+            for kernel in kernels:
+                with self.subTest(builder=builder, kernel=kernel):
+                    self.check_against_brute_force(spacebvh.Tracer(bvh, kernel))
+
+    def test_options_reach_the_builder(self):
+        plain = spacebvh.build(self.scene, "spatial", overlap_penalty=0.0)
+        disjoint = spacebvh.build(self.scene, "spatial", overlap_penalty=math.inf)
+        self.assertIn("C_o=0", plain.cost_model)
+        self.assertIn("C_o=inf", disjoint.cost_model)
+        optimized = spacebvh.build(self.scene, "binned", optimize=16)
+        self.assertEqual(optimized.builder, "binned+opt")
+        self.assertLessEqual(optimized.sah, spacebvh.build(self.scene, "binned").sah + 1e-9)
+        stats = spacebvh.build(self.scene, "cbvh", max_leaf_size=2).stats(epo=True)
+        self.assertEqual(stats["distinct_primitives"], self.scene.triangle_count - self.scene.degenerate_count)
+        self.assertGreaterEqual(stats["epo"], 0.0)
+        self.check_against_brute_force(spacebvh.Tracer(disjoint, "bvh8" if "bvh8" in spacebvh.kernels() else "binary"))
+
+    def test_same_tree_and_answers_for_any_thread_count(self):
+        one = spacebvh.build(self.scene, "spatial", threads=1)
+        two = spacebvh.build(self.scene, "spatial", threads=2)
+        self.assertEqual(one.stats(), two.stats())
+        a = spacebvh.Tracer(one, "binary", threads=1).intersect(self.origins, self.directions)
+        b = spacebvh.Tracer(two, "binary", threads=2).intersect(self.origins, self.directions)
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x, y)
+
+    def test_bad_rays_are_refused(self):
+        tracer = spacebvh.Tracer(spacebvh.build(self.scene, "binned"))
+        o, d = self.origins[:4].copy(), self.directions[:4].copy()
+        d[2] = 0
+        with self.assertRaisesRegex(spacebvh.Error, "ray 2"):
+            tracer.intersect(o, d)
+        with self.assertRaisesRegex(spacebvh.Error, "differ in length"):
+            tracer.intersect(self.origins[:3], self.directions[:4])
+        with self.assertRaisesRegex(spacebvh.Error, "tmin"):
+            tracer.occluded(self.origins[:4], self.directions[:4], 2.0, 1.0)
+        with self.assertRaises(spacebvh.Error):
+            spacebvh.Tracer(spacebvh.build(self.scene, "binned"), "no-such-kernel")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
