@@ -38,16 +38,17 @@ void in_arena(int threads, Work&& work) {
     arena.execute(work);
 }
 
-// An (n, 3) float array as a flat span, or Error naming the argument.
-std::span<const float> rows_of_three(const FloatArray& array, const char* what) {
+// An (n, 3) array as a flat span, or Error naming the argument.
+template <typename T, int kFlags>
+std::span<const T> rows_of_three(const py::array_t<T, kFlags>& array, const char* what) {
     if (array.ndim() != 2 || array.shape(1) != 3)
         throw Error(std::string(what) + " must have shape (n, 3), not " + std::to_string(array.ndim()) + " dimensions" +
                     (array.ndim() == 2 ? " of width " + std::to_string(array.shape(1)) : std::string()));
     return {array.data(), size_t(array.size())};
 }
 
-// Rays from (n, 3) origins and directions and scalar or per-ray tmin/tmax; checked as ray files are
-// (finite origin, non-zero finite direction, 0 <= tmin <= tmax), naming the first bad ray.
+// Rays from (n, 3) origins and directions and one [tmin, tmax] (0 <= tmin <= tmax); each ray checked as
+// ray files are (untraceable_ray_reason), naming the first bad one.
 std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directions, float tmin, float tmax) {
     const std::span<const float> o = rows_of_three(origins, "origins"), d = rows_of_three(directions, "directions");
     if (o.size() != d.size())
@@ -62,8 +63,7 @@ std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directio
         ray.dir = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
         ray.tmin = tmin;
         ray.tmax = tmax;
-        if (!is_finite(ray.org) || !is_finite(ray.dir) || ray.dir == Vec3(0.0f))
-            throw Error("ray " + std::to_string(i) + ": the origin must be finite and the direction finite and non-zero");
+        if (const char* reason = untraceable_ray_reason(ray)) throw Error("ray " + std::to_string(i) + ": " + reason);
     }
     return rays;
 }
@@ -214,10 +214,8 @@ PYBIND11_MODULE(spacebvh, m) {
     m.def(
         "mesh",
         [](const FloatArray& vertices, const IndexArray& indices, const std::string& name) {
-            const std::span<const float> v = rows_of_three(vertices, "vertices");
-            if (indices.ndim() != 2 || indices.shape(1) != 3) throw Error("indices must have shape (n, 3)");
             return std::make_shared<Scene>(
-                make_indexed_scene(v, std::span<const int64_t>(indices.data(), size_t(indices.size())), name));
+                make_indexed_scene(rows_of_three(vertices, "vertices"), rows_of_three(indices, "indices"), name));
         },
         py::arg("vertices"), py::arg("indices"), py::arg("name") = "mesh",
         "A scene from an indexed mesh: vertices (n, 3) floats, indices (m, 3) 0-based vertex indices.");

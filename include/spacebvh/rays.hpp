@@ -46,6 +46,10 @@ struct HitRecord {
 HitRecord to_record(const Hit& hit);
 HitRecord occlusion_record(bool occluded);
 
+// Why no kernel can trace `ray` (a non-finite origin or direction, a NaN t range, a zero direction),
+// or nullptr when it can. Ray files and the Python module refuse such rays with this reason.
+const char* untraceable_ray_reason(const Ray& ray);
+
 void write_ray_file(const std::string& path, std::span<const Ray> rays);
 std::vector<Ray> read_ray_file(const std::string& path);  // throws Error naming the file and record
 void write_hit_file(const std::string& path, std::span<const HitRecord> hits);

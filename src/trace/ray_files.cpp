@@ -148,12 +148,18 @@ std::vector<Ray> read_ray_file(const std::string& path) {
         r.dir = {get_f32(in + 12), get_f32(in + 16), get_f32(in + 20)};
         r.tmin = get_f32(in + 24);
         r.tmax = get_f32(in + 28);
-        // A NaN or infinite origin/direction cannot be traced by anyone; say which record it is.
-        if (!is_finite(r.org) || !is_finite(r.dir) || std::isnan(r.tmin) || std::isnan(r.tmax))
-            throw Error(path + ": record " + std::to_string(i) + ": non-finite origin or direction, or NaN t range");
-        if (r.dir == Vec3(0.0f)) throw Error(path + ": record " + std::to_string(i) + ": zero direction");
+        if (const char* reason = untraceable_ray_reason(r))
+            throw Error(path + ": record " + std::to_string(i) + ": " + reason);
     });
     return rays;
+}
+
+const char* untraceable_ray_reason(const Ray& ray) {
+    // A NaN or infinite origin/direction cannot be traced by anyone.
+    if (!is_finite(ray.org) || !is_finite(ray.dir) || std::isnan(ray.tmin) || std::isnan(ray.tmax))
+        return "non-finite origin or direction, or NaN t range";
+    if (ray.dir == Vec3(0.0f)) return "zero direction";
+    return nullptr;
 }
 
 void write_hit_file(const std::string& path, std::span<const HitRecord> hits) {
