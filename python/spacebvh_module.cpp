@@ -54,7 +54,7 @@ std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directio
     if (o.size() != d.size())
         throw Error("origins and directions differ in length: " + std::to_string(o.size() / 3) + " and " +
                     std::to_string(d.size() / 3));
-    if (!(tmin >= 0.0f) || !(tmax >= tmin) || std::isnan(tmax))
+    if (!(tmin >= 0.0f) || !(tmax >= tmin))  // also refuses NaN
         throw Error("need 0 <= tmin <= tmax, not tmin = " + std::to_string(tmin) + ", tmax = " + std::to_string(tmax));
     std::vector<Ray> rays(o.size() / 3);
     for (size_t i = 0; i < rays.size(); ++i) {
@@ -155,8 +155,8 @@ py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, cons
         in_arena(self.threads, [&] { self.tracer->occluded(rays, answers); });
     }
     py::array_t<bool> result(py::ssize_t(rays.size()));
-    auto out = result.mutable_unchecked<1>();
-    for (size_t i = 0; i < answers.size(); ++i) out(py::ssize_t(i)) = answers[i] != 0;
+    bool* out = result.mutable_data();
+    for (size_t i = 0; i < answers.size(); ++i) out[i] = answers[i] != 0;
     return result;
 }
 
