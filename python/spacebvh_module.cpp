@@ -6,7 +6,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include <cmath>

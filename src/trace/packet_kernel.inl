@@ -385,7 +385,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     const PackRay pack_ray(shear);
                     Hit unused;
                     bool found = false;
-                    test_leaf<S, kAnyHit, kStats>(layout, current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
+                    test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
                                                   kAnyHit ? unused : hits[i], found, stats);
                     if (kAnyHit && found) {
                         occluded[i] = 1;

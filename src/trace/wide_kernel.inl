@@ -71,11 +71,11 @@ template <class S, class Boxes>
 
 // A leaf's triangles: the shared pack test (triangle_pack.hpp), one at a time in the reference kernel.
 template <class S, bool kAnyHit, bool kStats>
-[[gnu::always_inline]] inline bool test_leaf(const WideLayout<S::kLanes>& layout, uint32_t first, uint32_t count, const Ray& ray,
+[[gnu::always_inline]] inline bool test_leaf(const TrianglePack* packs, uint32_t first, uint32_t count, const Ray& ray,
                                              const WatertightRay& shear, const PackRay& pack_ray, float& tmax, Hit& hit,
                                              bool& found, TraversalStats* stats) {
-    return test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(layout.packs.data(), first, count, ray, shear, pack_ray, tmax,
-                                                                 hit, found, stats);
+    return test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(packs, first, count, ray, shear, pack_ray, tmax, hit, found,
+                                                                 stats);
 }
 
 // The order children are visited in (closest hits here; any hit only in the packet kernel: the
@@ -241,8 +241,7 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 pack_ray = PackRay(shear);
                 sheared = true;
             }
-            if (test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax,
-                                                                     hit, found, stats))
+            if (test_leaf<S, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax, hit, found, stats))
                 return true;
         }
         // Pop the nearest pending subtree that may still hold a closer hit.
