@@ -46,22 +46,35 @@ std::span<const T> rows_of_three(const py::array_t<T, kFlags>& array, const char
     return {array.data(), size_t(array.size())};
 }
 
-// Rays from (n, 3) origins and directions and one [tmin, tmax] (0 <= tmin <= tmax); each ray checked as
-// ray files are (untraceable_ray_reason), naming the first bad one.
-std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directions, float tmin, float tmax) {
+// One float per ray: a number (the same for every ray) or an array of n.
+std::vector<float> per_ray(const py::object& value, size_t n, const char* what) {
+    if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) return std::vector<float>(n, value.cast<float>());
+    const FloatArray array = FloatArray::ensure(value);
+    if (array && array.ndim() == 0) return std::vector<float>(n, *array.data());  // a NumPy scalar
+    if (!array || array.ndim() != 1 || size_t(array.shape(0)) != n)
+        throw Error(std::string(what) + " must be a number or an array of " + std::to_string(n) + " (one per ray)");
+    return {array.data(), array.data() + n};
+}
+
+// Rays from (n, 3) origins and directions and [tmin, tmax] (numbers or one per ray, 0 <= tmin <=
+// tmax); each ray checked as ray files are (untraceable_ray_reason), naming the first bad one.
+std::vector<Ray> make_rays(const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
+                           const py::object& tmax) {
     const std::span<const float> o = rows_of_three(origins, "origins"), d = rows_of_three(directions, "directions");
     if (o.size() != d.size())
         throw Error("origins and directions differ in length: " + std::to_string(o.size() / 3) + " and " +
                     std::to_string(d.size() / 3));
-    if (!(tmin >= 0.0f) || !(tmax >= tmin))  // also refuses NaN
-        throw Error("need 0 <= tmin <= tmax, not tmin = " + std::to_string(tmin) + ", tmax = " + std::to_string(tmax));
     std::vector<Ray> rays(o.size() / 3);
+    const std::vector<float> low = per_ray(tmin, rays.size(), "tmin"), high = per_ray(tmax, rays.size(), "tmax");
     for (size_t i = 0; i < rays.size(); ++i) {
         Ray& ray = rays[i];
         ray.org = {o[3 * i], o[3 * i + 1], o[3 * i + 2]};
         ray.dir = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
-        ray.tmin = tmin;
-        ray.tmax = tmax;
+        ray.tmin = low[i];
+        ray.tmax = high[i];
+        if (!(ray.tmin >= 0.0f) || !(ray.tmax >= ray.tmin))  // also refuses NaN
+            throw Error("ray " + std::to_string(i) + ": need 0 <= tmin <= tmax, not tmin = " + std::to_string(ray.tmin) +
+                        ", tmax = " + std::to_string(ray.tmax));
         if (const char* reason = untraceable_ray_reason(ray)) throw Error("ray " + std::to_string(i) + ": " + reason);
     }
     return rays;
@@ -121,7 +134,8 @@ py::dict stats_of(const PyBvh& tree, bool with_epo) {
 }
 
 // Closest hits: (t, primitive, u, v) arrays; a miss has t = inf and primitive = -1.
-py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, float tmin, float tmax) {
+py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
+                       const py::object& tmax) {
     const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
     std::vector<Hit> hits(rays.size());
     {
@@ -145,8 +159,8 @@ py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const Fl
     return py::make_tuple(t, primitive, u, v);
 }
 
-py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, float tmin,
-                           float tmax) {
+py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions,
+                           const py::object& tmin, const py::object& tmax) {
     const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
     std::vector<uint8_t> answers(rays.size());
     {
@@ -159,16 +173,64 @@ py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, cons
     return result;
 }
 
-py::tuple rays_as_arrays(const std::vector<Ray>& rays) {
+// (origins, directions) of generated rays (tmin = 0, tmax = inf by the spec), or with their
+// (tmin, tmax) arrays too, as ray files carry them.
+py::tuple rays_as_arrays(const std::vector<Ray>& rays, bool with_range = false) {
     const py::ssize_t n = py::ssize_t(rays.size());
-    py::array_t<float> origins({n, py::ssize_t(3)}), directions({n, py::ssize_t(3)});
+    py::array_t<float> origins({n, py::ssize_t(3)}), directions({n, py::ssize_t(3)}), tmin(n), tmax(n);
     auto o = origins.mutable_unchecked<2>(), d = directions.mutable_unchecked<2>();
-    for (py::ssize_t i = 0; i < n; ++i)
+    float* low = tmin.mutable_data();
+    float* high = tmax.mutable_data();
+    for (py::ssize_t i = 0; i < n; ++i) {
+        const Ray& ray = rays[size_t(i)];
         for (int axis = 0; axis < 3; ++axis) {
-            o(i, axis) = rays[size_t(i)].org[axis];
-            d(i, axis) = rays[size_t(i)].dir[axis];
+            o(i, axis) = ray.org[axis];
+            d(i, axis) = ray.dir[axis];
         }
-    return py::make_tuple(origins, directions);
+        low[i] = ray.tmin;
+        high[i] = ray.tmax;
+    }
+    return with_range ? py::make_tuple(origins, directions, tmin, tmax) : py::make_tuple(origins, directions);
+}
+
+// Hit records (../shared/spec/rays.md) from t and primitive arrays (-1 = a miss, t = inf).
+std::vector<HitRecord> make_hit_records(const FloatArray& t, const IndexArray& primitive) {
+    if (t.ndim() != 1 || primitive.ndim() != 1 || t.shape(0) != primitive.shape(0))
+        throw Error("t and primitive must be arrays of one length");
+    std::vector<HitRecord> records(size_t(t.shape(0)));
+    for (size_t i = 0; i < records.size(); ++i) {
+        const float distance = t.data()[i];
+        const int64_t id = primitive.data()[i];
+        if (std::isnan(distance)) throw Error("hit " + std::to_string(i) + ": t is NaN");
+        if (id < -1 || id >= int64_t(kInvalidIndex))
+            throw Error("hit " + std::to_string(i) + ": primitive " + std::to_string(id) + " out of range (-1 = a miss)");
+        records[i] = {distance, id < 0 ? kInvalidIndex : uint32_t(id)};
+    }
+    return records;
+}
+
+py::tuple hit_records_as_arrays(const std::vector<HitRecord>& records) {
+    const py::ssize_t n = py::ssize_t(records.size());
+    py::array_t<float> t(n);
+    py::array_t<int64_t> primitive(n);
+    float* t_out = t.mutable_data();
+    int64_t* primitive_out = primitive.mutable_data();
+    for (size_t i = 0; i < records.size(); ++i) {
+        t_out[i] = records[i].t;
+        primitive_out[i] = records[i].primitive == kInvalidIndex ? -1 : int64_t(records[i].primitive);
+    }
+    return py::make_tuple(t, primitive);
+}
+
+SceneTransform make_transform(const std::string& rotate, float scale, const std::vector<float>& translate) {
+    SceneTransform transform;
+    if (!rotate.empty()) transform.rotate_degrees = SceneTransform::parse_rotation(rotate);
+    if (!std::isfinite(scale) || scale == 0.0f) throw Error("scale must be a finite non-zero number");
+    transform.scale = scale;
+    if (translate.size() != 3) throw Error("translate must be three numbers (x, y, z)");
+    transform.translate = {translate[0], translate[1], translate[2]};
+    if (!is_finite(transform.translate)) throw Error("translate must be finite");
+    return transform;
 }
 
 }  // namespace
@@ -208,8 +270,14 @@ PYBIND11_MODULE(spacebvh, m) {
         });
 
     m.def(
-        "load_scene", [](const std::string& source) { return std::make_shared<Scene>(load_scene(source)); }, py::arg("source"),
-        "Loads .obj, .ply, .gltf or .glb, or builtin:NAME (see builtin_scenes()).");
+        "load_scene",
+        [](const std::string& source, const std::string& rotate, float scale, const std::vector<float>& translate) {
+            return std::make_shared<Scene>(load_scene(source, make_transform(rotate, scale, translate)));
+        },
+        py::arg("source"), py::kw_only(), py::arg("rotate") = "", py::arg("scale") = 1.0f,
+        py::arg("translate") = std::vector<float>{0.0f, 0.0f, 0.0f},
+        "Loads .obj, .ply, .gltf or .glb, or builtin:NAME (see builtin_scenes()), with the CLI's load-time transform: "
+        "rotate='x:45,y:45,z:45' (degrees, R = Rz*Ry*Rx), then scale, then translate.");
     m.def(
         "mesh",
         [](const FloatArray& vertices, const IndexArray& indices, const std::string& name) {
@@ -248,13 +316,43 @@ PYBIND11_MODULE(spacebvh, m) {
         .def_property_readonly("kernel", [](const PyTracer& self) { return self.tracer->name(); })
         .def_property_readonly("memory_bytes", [](const PyTracer& self) { return self.tracer->memory_bytes(); })
         .def("intersect", &closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
-             py::arg("tmax") = kInfinity, "Closest hits: arrays t, primitive (-1 on a miss), u, v.")
+             py::arg("tmax") = kInfinity,
+             "Closest hits within [tmin, tmax] (numbers, or arrays of one per ray): arrays t, primitive (-1 on a miss), u, v.")
         .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
-             py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax]: a bool array.");
+             py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax] (numbers, or arrays of one per ray): a bool array.");
 
     m.def(
         "random_rays",
         [](const Scene& scene, size_t count, uint64_t seed) { return rays_as_arrays(generate_random_rays(scene.bounds(), count, seed)); },
         py::arg("scene"), py::arg("count"), py::arg("seed") = 1,
         "The random rays of ../shared/spec/rays.md: (origins, directions) arrays.");
+    m.def(
+        "primary_rays",
+        [](const Scene& scene, uint32_t width, uint32_t height, const std::string& camera) {
+            if (width == 0 || height == 0 || width > 16384 || height > 16384) throw Error("width and height must be in [1, 16384]");
+            return rays_as_arrays(generate_primary_rays(camera.empty() ? default_camera(scene) : Camera::parse(camera), width, height));
+        },
+        py::arg("scene"), py::arg("width") = 1024u, py::arg("height") = 1024u, py::arg("camera") = "",
+        "The primary rays of ../shared/spec/rays.md, row by row from the top: (origins, directions) arrays. camera: "
+        "'ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy' (the MANIFEST's values), default the spec's camera for the scene.");
+    m.def(
+        "read_rays", [](const std::string& path) { return rays_as_arrays(read_ray_file(path), true); }, py::arg("path"),
+        "A ray file of ../shared/spec/rays.md: (origins, directions, tmin, tmax) arrays.");
+    m.def(
+        "write_rays",
+        [](const std::string& path, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
+           const py::object& tmax) { write_ray_file(path, make_rays(origins, directions, tmin, tmax)); },
+        py::arg("path"), py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f, py::arg("tmax") = kInfinity,
+        "Writes a ray file of ../shared/spec/rays.md (tmin, tmax: numbers or one per ray).");
+    m.def(
+        "read_hits", [](const std::string& path) { return hit_records_as_arrays(read_hit_file(path)); }, py::arg("path"),
+        "A hit file of ../shared/spec/rays.md: (t, primitive) arrays, primitive -1 for a miss (occlusion files: t = 0 "
+        "occluded, inf free).");
+    m.def(
+        "write_hits",
+        [](const std::string& path, const FloatArray& t, const IndexArray& primitive) {
+            write_hit_file(path, make_hit_records(t, primitive));
+        },
+        py::arg("path"), py::arg("t"), py::arg("primitive"),
+        "Writes a hit file of ../shared/spec/rays.md from t and primitive arrays (-1 = a miss), e.g. intersect()'s.");
 }

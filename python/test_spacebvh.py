@@ -2,6 +2,9 @@
 Moller-Trumbore over every triangle). Run by CTest (`python_module`) with the built module on
 PYTHONPATH: python3 python/test_spacebvh.py"""
 import math
+import os
+import pathlib
+import tempfile
 import unittest
 
 import numpy as np
@@ -66,6 +69,31 @@ class SceneTests(unittest.TestCase):
         self.assertGreater(scene.triangle_count, 0)
         lo, hi = scene.bounds
         self.assertTrue(all(l <= h for l, h in zip(lo, hi)))
+
+    def test_load_time_transform_and_primary_rays(self):
+        plain = spacebvh.load_scene("builtin:organic")
+        moved = spacebvh.load_scene("builtin:organic", scale=2.0, translate=(10, 0, 0))
+        self.assertEqual(moved.triangle_count, plain.triangle_count)
+        (lo, hi), (mlo, mhi) = plain.bounds, moved.bounds
+        np.testing.assert_allclose(np.array(mlo), 2 * np.array(lo) + [10, 0, 0], rtol=1e-5, atol=1e-5)
+        np.testing.assert_allclose(np.array(mhi), 2 * np.array(hi) + [10, 0, 0], rtol=1e-5, atol=1e-5)
+        rotated = spacebvh.load_scene("builtin:interior", rotate="x:45,y:45,z:45")
+        self.assertNotEqual(rotated.bounds, spacebvh.load_scene("builtin:interior").bounds)
+        with self.assertRaises(spacebvh.Error):
+            spacebvh.load_scene("builtin:organic", rotate="w:45")
+        with self.assertRaisesRegex(spacebvh.Error, "scale"):
+            spacebvh.load_scene("builtin:organic", scale=0.0)
+        origins, directions = spacebvh.primary_rays(plain, 16, 8)
+        self.assertEqual(origins.shape, (128, 3))
+        np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0, rtol=1e-5)
+        self.assertTrue(np.all(origins == origins[0]))  # one eye
+        eye, _ = spacebvh.primary_rays(plain, 4, 4, camera="0,0,5,0,0,0,0,1,0,60")
+        np.testing.assert_array_equal(eye[0], [0, 0, 5])
+        # The centre pixel looks at the target.
+        _, look = spacebvh.primary_rays(plain, 1, 1, camera="0,0,5,0,0,0,0,1,0,60")
+        np.testing.assert_allclose(look[0], [0, 0, -1], atol=1e-6)
+        with self.assertRaises(spacebvh.Error):
+            spacebvh.primary_rays(plain, 0, 4)
 
     def test_mesh_from_arrays_and_bad_input(self):
         vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float32)
@@ -152,6 +180,64 @@ class TracingTests(unittest.TestCase):
         b = spacebvh.Tracer(two, "binary", threads=2).intersect(self.origins, self.directions)
         for x, y in zip(a, b):
             np.testing.assert_array_equal(x, y)
+
+    def test_per_ray_ranges(self):
+        tracer = spacebvh.Tracer(spacebvh.build(self.scene, "spatial"), "bvh8" if "bvh8" in spacebvh.kernels() else "binary")
+        n = self.origins.shape[0]
+        tmax = np.where(np.arange(n) % 2 == 0, 1.0, np.inf).astype(np.float32)
+        t, prim, _, _ = tracer.intersect(self.origins, self.directions, 0.0, tmax)
+        # The closest hit within [0, tmax] is the closest hit overall when that lies within, else none.
+        with np.errstate(invalid="ignore"):  # inf - inf where both are infinite: never close to call
+            clear = self.decided & ~(np.abs(self.expected_t - tmax) <= 1e-5)
+        within = (self.expected_prim >= 0) & (self.expected_t <= tmax)
+        self.assertGreater(np.count_nonzero(clear & within & (self.expected_prim >= 0)), 100)
+        self.assertGreater(np.count_nonzero(clear & ~within), 100)
+        np.testing.assert_array_equal(prim[clear], np.where(within, self.expected_prim, -1)[clear])
+        np.testing.assert_array_equal(tracer.occluded(self.origins, self.directions, 0.0, tmax)[clear], within[clear])
+        # A NumPy scalar is the same as a number; arrays of the wrong length are refused.
+        np.testing.assert_array_equal(tracer.intersect(self.origins, self.directions, np.float32(0), np.float32(1.0))[1],
+                                      tracer.intersect(self.origins, self.directions, 0.0, 1.0)[1])
+        with self.assertRaisesRegex(spacebvh.Error, "one per ray"):
+            tracer.intersect(self.origins, self.directions, 0.0, tmax[:-1])
+        bad = tmax.copy()
+        bad[5] = -1.0
+        with self.assertRaisesRegex(spacebvh.Error, "ray 5"):
+            tracer.occluded(self.origins, self.directions, 0.0, bad)
+
+    def test_ray_and_hit_files(self):
+        tracer = spacebvh.Tracer(spacebvh.build(self.scene, "binned"), "binary")
+        n = 200
+        tmin = np.linspace(0.0, 0.5, n, dtype=np.float32)
+        with tempfile.TemporaryDirectory() as folder:
+            rays_path, hits_path = os.path.join(folder, "r.rays"), os.path.join(folder, "h.hits")
+            spacebvh.write_rays(rays_path, self.origins[:n], self.directions[:n], tmin, np.inf)
+            # The layout of ../shared/spec/rays.md, read independently of the module.
+            raw = pathlib.Path(rays_path).read_bytes()
+            self.assertEqual(raw[:8], b"REFRAYS1")
+            self.assertEqual(int.from_bytes(raw[8:16], "little"), n)
+            records = np.frombuffer(raw[16:], dtype="<f4").reshape(n, 8)
+            np.testing.assert_array_equal(records[:, 0:3], self.origins[:n])
+            np.testing.assert_array_equal(records[:, 6], tmin)
+            origins, directions, low, high = spacebvh.read_rays(rays_path)
+            np.testing.assert_array_equal(origins, self.origins[:n])
+            np.testing.assert_array_equal(directions, self.directions[:n])
+            np.testing.assert_array_equal(low, tmin)
+            self.assertTrue(np.all(np.isinf(high)))
+            t, prim, _, _ = tracer.intersect(origins, directions, low, high)
+            spacebvh.write_hits(hits_path, t, prim)
+            raw = pathlib.Path(hits_path).read_bytes()
+            self.assertEqual(raw[:8], b"REFHITS1")
+            records = np.frombuffer(raw[16:], dtype=[("t", "<f4"), ("primitive", "<u4")])
+            np.testing.assert_array_equal(records["t"], t)
+            np.testing.assert_array_equal(records["primitive"], np.where(prim < 0, 0xFFFFFFFF, prim))
+            t_read, prim_read = spacebvh.read_hits(hits_path)
+            np.testing.assert_array_equal(t_read, t)
+            np.testing.assert_array_equal(prim_read, prim)
+            with self.assertRaisesRegex(spacebvh.Error, "out of range"):
+                spacebvh.write_hits(hits_path, t, np.full(n, -2))
+            pathlib.Path(rays_path).write_bytes(b"REFRAYS1" + (5).to_bytes(8, "little") + bytes(40))
+            with self.assertRaisesRegex(spacebvh.Error, "r.rays"):
+                spacebvh.read_rays(rays_path)
 
     def test_bad_rays_are_refused(self):
         tracer = spacebvh.Tracer(spacebvh.build(self.scene, "binned"))
