@@ -1,5 +1,6 @@
 #include "cli_common.hpp"
 
+#include "spacebvh/rays.hpp"
 #include "spacebvh/tracer.hpp"
 
 #include <sys/resource.h>
@@ -25,12 +26,9 @@ void SceneOptions::add_to(CLI::App& command) {
 SceneTransform SceneOptions::transform() const {
     SceneTransform transform;
     if (!rotate.empty()) transform.rotate_degrees = SceneTransform::parse_rotation(rotate);
-    if (!std::isfinite(scale) || scale == 0.0f) throw Error("--scale must be a finite non-zero number");
     transform.scale = scale;
-    if (translate.size() == 3) {
-        transform.translate = {translate[0], translate[1], translate[2]};
-        if (!is_finite(transform.translate)) throw Error("--translate must be finite");
-    }
+    if (translate.size() == 3) transform.translate = {translate[0], translate[1], translate[2]};
+    if (const char* reason = transform.invalid_reason()) throw Error("--" + std::string(reason));
     return transform;
 }
 
@@ -176,8 +174,8 @@ void CameraOptions::add_to(CLI::App& command) {
 }
 
 Camera CameraOptions::camera_for(const Scene& scene, const std::string& source, const SceneTransform& transform) const {
-    if (width == 0 || height == 0 || width > 16384 || height > 16384)
-        throw Error("--width and --height must be in [1, 16384]");
+    if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
+        throw Error("--width and --height must be in [1, " + std::to_string(kMaxImageSide) + "]");
     if (!camera.empty()) return Camera::parse(camera);
     return camera_for_scene(scene, source, transform);
 }

@@ -30,6 +30,9 @@ private:
 };
 
 std::vector<Ray> generate_random_rays(const AABB& scene_bounds, size_t count, uint64_t seed);
+// The largest image side of primary rays and renders (16384^2 rays are 8 GiB already).
+inline constexpr uint32_t kMaxImageSide = 16384;
+// Row by row from the top; throws Error for a side of 0 or above kMaxImageSide, or a bad camera.
 std::vector<Ray> generate_primary_rays(const Camera& camera, uint32_t width, uint32_t height);
 // One ray per primary ray that hits, in primary order. epsilon <= 0 means the spec's default
 // 1e-4 * |scene diagonal|.

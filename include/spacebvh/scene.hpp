@@ -24,6 +24,9 @@ struct SceneTransform {
         return rotate_degrees == Vec3(0.0f) && scale == 1.0f && translate == Vec3(0.0f);
     }
     Vec3 apply(Vec3 p) const;
+    // Why this transform cannot be applied ("scale must be a finite non-zero number", "translate must
+    // be finite"), or nullptr when it can. The CLI and the Python module refuse such transforms with it.
+    const char* invalid_reason() const;
     // Parses "x:45,y:45,z:45" (any subset, any order). Throws Error on malformed text.
     static Vec3 parse_rotation(const std::string& text);
 };

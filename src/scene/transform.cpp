@@ -56,6 +56,12 @@ TransformMatrix::TransformMatrix(const SceneTransform& transform) {
 
 Vec3 SceneTransform::apply(Vec3 p) const { return scene_detail::TransformMatrix(*this).apply(p); }
 
+const char* SceneTransform::invalid_reason() const {
+    if (!std::isfinite(scale) || scale == 0.0f) return "scale must be a finite non-zero number";
+    if (!is_finite(translate)) return "translate must be finite";
+    return nullptr;
+}
+
 Vec3 SceneTransform::parse_rotation(const std::string& text) {
     auto fail = [&](const std::string& why) -> Vec3 {
         throw Error("bad rotation '" + text + "' (expected e.g. x:45,y:45,z:45): " + why);

@@ -99,7 +99,9 @@ std::vector<Ray> generate_random_rays(const AABB& scene_bounds, size_t count, ui
 
 // Spec "primary": a pinhole camera, pixel (x, y) has index y*W + x, row 0 at the top.
 std::vector<Ray> generate_primary_rays(const Camera& camera, uint32_t width, uint32_t height) {
-    if (width == 0 || height == 0) throw Error("primary rays: the image size must be at least 1 x 1");
+    if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
+        throw Error("primary rays: image size must be between 1 and " + std::to_string(kMaxImageSide) + " on each side, got " +
+                    std::to_string(width) + " x " + std::to_string(height));
     if (!(camera.fovy_degrees > 0.0f && camera.fovy_degrees < 180.0f))
         throw Error("primary rays: fovy must be in (0, 180) degrees, got " + std::to_string(camera.fovy_degrees));
     const Vec3 forward = normalize3(sub(camera.target, camera.eye));

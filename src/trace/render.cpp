@@ -28,7 +28,6 @@
 namespace spacebvh {
 namespace {
 
-constexpr uint32_t kMaxImageSide = 16384;
 constexpr std::array<uint8_t, 3> kBackground{38, 42, 52};
 constexpr std::array<uint8_t, 3> kLegendBackground{24, 24, 24};
 constexpr std::array<uint8_t, 3> kLegendInk{235, 235, 235};
