@@ -1,12 +1,76 @@
 #include "build/object_sweep_split_finder.hpp"
 
-#include <tbb/parallel_sort.h>
-
 #include <algorithm>
+#include <array>
+#include <bit>
+#include <utility>
 #include <vector>
 
 namespace spacebvh::build {
 namespace {
+
+struct KeyedReference {
+    uint64_t key;
+    uint32_t index;
+};
+
+// Least-significant-digit radix sort on the 64-bit keys, 8 bits per pass, stable. One counting pass
+// makes all eight histograms; a digit that is the same for every key (the primitive's high bits in
+// a node, often) is skipped.
+void radix_sort(std::vector<KeyedReference>& items) {
+    const size_t count = items.size();
+    std::vector<std::array<uint32_t, 256>> histograms(8, std::array<uint32_t, 256>{});
+    for (const KeyedReference& item : items)
+        for (int digit = 0; digit < 8; ++digit) ++histograms[digit][(item.key >> (8 * digit)) & 0xff];
+    std::vector<KeyedReference> scratch(count);
+    for (int digit = 0; digit < 8; ++digit) {
+        std::array<uint32_t, 256>& histogram = histograms[digit];
+        if (histogram[(items[0].key >> (8 * digit)) & 0xff] == count) continue;
+        uint32_t offset = 0;
+        for (uint32_t& bucket : histogram) offset += std::exchange(bucket, offset);
+        for (const KeyedReference& item : items) scratch[histogram[(item.key >> (8 * digit)) & 0xff]++] = item;
+        items.swap(scratch);
+    }
+}
+
+// Sorts the references by CentroidOrder{axis}, but on precomputed integer keys instead of computing
+// two centroids per comparison and moving 28-byte references: (centroid as an order-preserving
+// integer, primitive) packed into 64 bits, radix-sorted, then one gather. Only references equal on
+// both (pieces of one triangle with the same centroid) are compared by CentroidOrder itself, so the
+// order is the same total order. crytek_sponza, 2 threads: the sorts took 40 % of a `spatial`
+// build; with this it went from 999 to 605 ms, and `cbvh` from 706 to 339 ms (same tree).
+void sort_by_centroid(std::span<Reference> references, int axis) {
+    const size_t count = references.size();
+    const CentroidOrder order{axis};
+    if (count <= 64) {
+        std::sort(references.begin(), references.end(), order);
+        return;
+    }
+    std::vector<KeyedReference> keyed(count);
+    for (size_t i = 0; i < count; ++i) {
+        // + 0.0f turns -0 into +0 (they compare equal as floats); input coordinates are finite.
+        const uint32_t bits = std::bit_cast<uint32_t>(references[i].centroid(axis) + 0.0f);
+        const uint32_t ordered = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+        keyed[i] = {(uint64_t(ordered) << 32) | references[i].primitive, uint32_t(i)};
+    }
+    if (count > 1024) {
+        radix_sort(keyed);
+    } else {
+        std::sort(keyed.begin(), keyed.end(), [](const KeyedReference& a, const KeyedReference& b) { return a.key < b.key; });
+    }
+    for (size_t begin = 0; begin < count;) {
+        size_t end = begin + 1;
+        while (end < count && keyed[end].key == keyed[begin].key) ++end;
+        if (end - begin > 1)
+            std::sort(keyed.begin() + begin, keyed.begin() + end, [&](const KeyedReference& a, const KeyedReference& b) {
+                return order(references[a.index], references[b.index]);
+            });
+        begin = end;
+    }
+    std::vector<Reference> sorted(count);
+    for (size_t i = 0; i < count; ++i) sorted[i] = references[keyed[i].index];
+    std::copy(sorted.begin(), sorted.end(), references.begin());
+}
 
 // Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates).
 template <typename Sink>
@@ -19,11 +83,8 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     std::vector<AABB> suffix_bounds(count);
     for (int axis = 0; axis < 3; ++axis) {
         if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
-        // The order is total, so the unstable parallel sort still gives one answer.
-        if (count > 64 * 1024)
-            tbb::parallel_sort(references.begin(), references.end(), CentroidOrder{axis});
-        else
-            std::sort(references.begin(), references.end(), CentroidOrder{axis});
+        // The order is total, so the sort gives one answer.
+        sort_by_centroid(references, axis);
 
         AABB right;
         for (size_t i = count; i-- > 1;) {
