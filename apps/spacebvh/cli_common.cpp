@@ -62,6 +62,9 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--spatial-bins", spatial_bins, "bins per axis of the spatial search space")->capture_default_str();
     command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
         ->capture_default_str();
+    command.add_option("--spatial-gate", spatial_gate,
+                       "try spatial planes only where the best object split's children overlap by at least this "
+                       "fraction of the root's surface area (0 = everywhere; default: the builder's)");
     command.add_flag("--no-unsplitting", no_unsplitting, "clip every straddling reference into both children");
     command.add_option("--search", search,
                        "search spaces combined at every node, any union of: object (exact SAH sweep), binned "
@@ -130,6 +133,7 @@ BuildOptions BuildCliOptions::options(const std::string& builder_text) const {
     options.spatial_bins = spatial_bins;
     options.reference_budget = reference_budget;
     options.unsplitting = !no_unsplitting;
+    if (!spatial_gate.empty()) options.spatial_gate_alpha = parse_float_or_inf(spatial_gate, "--spatial-gate");
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
     options.grid_resolution = grid_resolution;
     options.grid_max_cells = grid_max_cells;

@@ -35,6 +35,7 @@ struct BuildCliOptions {
     std::string overlap_penalty;  // a number or "inf"; empty: the builder's own default
     uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
     float reference_budget = 1.3f;
+    std::string spatial_gate;  // a number; empty: the builder's own
     bool no_unsplitting = false;
     std::string search;  // "object,spatial,grid"; empty: the builder's own search spaces
     float grid_resolution = 1.0f;

@@ -3,7 +3,6 @@
 // does the EPO metric.
 #pragma once
 
-#include <span>
 
 #include "spacebvh/geometry.hpp"
 
@@ -21,14 +20,6 @@ struct SplitBounds {
     AABB right;
 };
 SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis, float position);
-
-// The pieces of the triangle (restricted to `current_bounds`) between consecutive planes on one axis:
-// pieces[i] lies between planes[i-1] and planes[i] (pieces[0] below planes[0], the last above the
-// last plane). planes ascending, pieces.size() == planes.size() + 1. The same result as repeated
-// split_triangle_bounds, but clipping the triangle only once (binned spatial splits chop references
-// into every bin they span).
-void chop_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis,
-                          std::span<const float> planes, std::span<AABB> pieces);
 
 // Area of the part of the triangle inside the box (exact polygon clipping; used by EPO).
 double clipped_triangle_area(const Triangle& triangle, const AABB& box);

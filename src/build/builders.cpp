@@ -37,8 +37,8 @@ constexpr BuilderPreset kPresets[] = {
      "binned object SAH (Wald 2007), --bins bins per axis; the fast classical builder"},
     {"kdbvh", uint32_t(SearchSpace::spatial_binned), Presplit::none, kInf, false, 0.0f,
      "spatial (kd) search space only: planes on --spatial-bins bins, straddlers clipped; disjoint children (KDBVH)"},
-    {"spatial", SearchSpace::object_sweep | SearchSpace::spatial_binned, Presplit::none, 1.0f, true, 0.0f,
-     "object sweep + spatial planes chosen by the overlap-penalised SAH (--co), with unsplitting: the practical builder"},
+    {"spatial", SearchSpace::object_sweep | SearchSpace::spatial_binned, Presplit::none, 1.0f, true, 1e-4f,
+     "object sweep + spatial planes chosen by the overlap-penalised SAH (--co), with unsplitting, spatial tried when object overlap >= 1e-4 SA(root): the practical builder (fast variant: --search binned,spatial)"},
     {"sbvh", SearchSpace::object_sweep | SearchSpace::spatial_binned, Presplit::none, 0.0f, true, 1e-5f,
      "SBVH (Stich et al. 2009): object sweep + binned spatial with unsplitting, spatial tried when object overlap >= 1e-5 SA(root)"},
     {"esc", uint32_t(SearchSpace::object_sweep), Presplit::early_split_clipping, 0.0f, false, 0.0f,
@@ -183,6 +183,9 @@ void BuildOptions::validate() const {
         throw Error("max depth must be in [1, 1024], got " + std::to_string(max_depth));
     if (spatial_bins < 2 || spatial_bins > 1024)
         throw Error("spatial bins must be in [2, 1024], got " + std::to_string(spatial_bins));
+    if (!(spatial_gate_alpha < 0.0f || spatial_gate_alpha <= 1.0f))
+        throw Error("spatial gate alpha must be in [0, 1] (or negative for the builder's own), got " +
+                    std::to_string(spatial_gate_alpha));
     if (!(reference_budget >= 1.0f && reference_budget <= 4.0f))
         throw Error("reference budget must be in [1, 4] (a multiple of the triangle count), got " +
                     std::to_string(reference_budget));
@@ -238,7 +241,8 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
     driver.cancel = options.cancel;
     build::TopDownBuilder builder(options.cost, {options.max_leaf_size, options.max_depth},
                                   build::make_search_spaces(spaces, scene.triangles, options, preset.allow_unsplitting,
-                                                            preset.spatial_gate_alpha),
+                                                            options.spatial_gate_alpha >= 0.0f ? options.spatial_gate_alpha
+                                                                                               : preset.spatial_gate_alpha),
                                   scene.triangles, std::move(driver));
     // References: one per triangle, or the pre-split pieces (within the budget).
     std::vector<build::Reference> references;

@@ -214,7 +214,7 @@ SpatialSweepPlanes sweep_spatial_planes(std::span<const Reference> references, s
 Split SpatialSweepSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
     Split best;
     const std::span<Reference> references = context.references;
-    if (references.size() < 2 || spatial_search_gated_off(context, options_.gate_alpha)) return best;
+    if (references.size() < 2 || spatial_search_gated_off(context, cost, options_.gate_alpha)) return best;
     const AABB& node = context.summary.bounds;
     std::array<SpatialSweepPlanes, 3> sweeps;
     auto run = [&](int axis) {

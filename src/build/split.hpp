@@ -83,6 +83,7 @@ struct NodeContext {
     size_t capacity;   // references this node's subtree may hold (its share of the reference budget)
     float root_area;   // SA(root), for gates relative to the scene
     const Split& best_so_far;  // the cheapest split of the search spaces evaluated before this one
+    bool must_split = false;   // too many references for a leaf: split even if no split pays
 };
 
 // Where a finder's evaluation loop puts the configurations it evaluates. A finder offers a split

@@ -7,7 +7,7 @@ namespace spacebvh::build {
 Split SplitSearch::cheapest(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity) const {
     Split best;
     for (const auto& search_space : search_spaces_) {
-        const NodeContext context{references, summary, capacity, root_area_, best};
+        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size())};
         Split candidate = search_space->find(context, cost_);
         if (candidate.cost < best.cost) best = candidate;
     }
@@ -22,7 +22,7 @@ std::vector<Split> SplitSearch::candidates(std::span<Reference> references, cons
     size_t best_index = 0;
     std::vector<Split> all;
     for (const auto& search_space : search_spaces_) {
-        const NodeContext context{references, summary, capacity, root_area_, best};
+        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size())};
         for (const Split& candidate : search_space->find_candidates(context, cost_, per_axis)) {
             if (candidate.cost < best.cost) {
                 best = candidate;

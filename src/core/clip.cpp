@@ -348,74 +348,6 @@ float TrianglePiece::quiet_until(const AABB& box, int axis, float position, bool
     return std::max(now, round_down(quiet));
 }
 
-// Sutherland-Hodgman peeling slab after slab (clip the rest above each plane, the slab below it)
-// keeps, for slab j, the vertices with planes[j-1] <= x <= planes[j] and the points where edges
-// cross those planes; an edge already cut at an earlier plane is cut again from its cut point. This
-// replays exactly that arithmetic per edge (one chain of cut points walking along the edge), without
-// building the intermediate polygons: the same bits, a fraction of the work.
-void TrianglePiece::chop(int axis, std::span<const float> planes, std::span<AABB> pieces) const {
-    std::fill(pieces.begin(), pieces.end(), AABB::empty());
-    if (empty()) return;
-    const size_t plane_count = planes.size();
-    // The slabs' points, in double; only the slabs the polygon touches (touched_first..touched_last)
-    // are rounded at the end, and reset there, so the scratch is all empty between calls.
-    thread_local std::vector<DoubleBounds> slab_points;
-    if (slab_points.size() < pieces.size()) slab_points.resize(pieces.size());
-    size_t touched_first = pieces.size(), touched_last = 0;
-    // A point on x[axis] = x belongs to every slab whose closed range contains x: slabs first..last.
-    auto add = [&](const Point& p, size_t first, size_t last) {
-        for (size_t j = first; j <= last; ++j) slab_points[j].extend(p);
-        touched_first = std::min(touched_first, first);
-        touched_last = std::max(touched_last, last);
-    };
-    // The slab after the run of planes equal to planes[k] (a cut on plane k lies in slabs k..that).
-    auto end_of_run = [&](size_t k) {
-        size_t last = k + 1;
-        while (last < plane_count && planes[last] == planes[k]) ++last;
-        return last;
-    };
-    for (int i = 0; i < polygon_.count; ++i) {
-        const Point& a = polygon_.points[i];
-        const Point& b = polygon_.points[(i + 1) % polygon_.count];
-        const double xa = a.c[axis], xb = b.c[axis];
-        const size_t first = size_t(std::lower_bound(planes.begin(), planes.end(), xa,
-                                                     [](float plane, double value) { return double(plane) < value; }) -
-                                    planes.begin());
-        size_t after = first;  // first plane above xa
-        while (after < plane_count && double(planes[after]) <= xa) ++after;
-        add(a, first, after);
-        if (xa == xb) continue;
-        // Planes strictly between the ends, ascending; each cut moves the end below the plane up.
-        size_t k = xa < xb ? after : size_t(std::upper_bound(planes.begin(), planes.end(), xb,
-                                                            [](double value, float plane) { return value < double(plane); }) -
-                                           planes.begin());
-        Point low = xa < xb ? a : b;  // the current cut point on the low side
-        const double high = std::max(xa, xb);
-        while (k < plane_count && double(planes[k]) < high) {
-            const double position = planes[k];
-            // The rest polygon holds the edge in its original direction: a -> (cut b) or (cut a) -> b.
-            const Point& from = xa < xb ? low : a;
-            const Point& to = xa < xb ? b : low;
-            low = crossing(from, to, from.c[axis] - position, to.c[axis] - position, axis, position);
-            const size_t last = end_of_run(k);
-            add(low, k, last);
-            k = last;  // repeated planes: the cut point lies on them, no strict crossing
-        }
-    }
-    for (size_t j = touched_first; j <= touched_last && j <= plane_count; ++j) {
-        pieces[j] = slab_points[j].rounded();
-        slab_points[j] = DoubleBounds{};
-        AABB slab_limit = limit_;
-        if (j > 0) slab_limit.lo[axis] = std::max(slab_limit.lo[axis], planes[j - 1]);
-        if (j < plane_count) slab_limit.hi[axis] = std::min(slab_limit.hi[axis], planes[j]);
-        if (slab_limit.is_empty() || pieces[j].is_empty()) {
-            pieces[j] = AABB::empty();
-        } else {
-            pieces[j] = polygon_.overflow ? slab_limit : clamped_into(pieces[j], slab_limit);
-        }
-    }
-}
-
 }  // namespace spacebvh::clipping
 
 namespace spacebvh {
@@ -456,11 +388,6 @@ AABB clip_triangle_bounds(const Triangle& triangle, const AABB& box) {
 
 SplitBounds split_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis, float position) {
     return clipping::TrianglePiece(triangle, current_bounds).split(axis, position);
-}
-
-void chop_triangle_bounds(const Triangle& triangle, const AABB& current_bounds, int axis,
-                          std::span<const float> planes, std::span<AABB> pieces) {
-    clipping::TrianglePiece(triangle, current_bounds).chop(axis, planes, pieces);
 }
 
 double clipped_triangle_area(const Triangle& triangle, const AABB& box) {

@@ -69,9 +69,6 @@ public:
     // less a margin far above the rounding of the crossing points.
     float quiet_until(const AABB& box, int axis, float position, bool below) const;
 
-    // Tight bounds of the piece between consecutive ascending planes (chop_triangle_bounds).
-    void chop(int axis, std::span<const float> planes, std::span<AABB> pieces) const;
-
 private:
     Polygon polygon_;
     AABB limit_ = AABB::empty();  // triangle bounds ∩ reference bounds: every result lies inside
