@@ -94,8 +94,7 @@ Case load_case(const SharedScene& s) {
 // scene on the loaded 2-core machine elsewhere).
 bool skipped(const SharedScene& s, const std::string& builder) {
     const std::string key = s.key;
-    if (builder == "full") return key != "bunny" && key != "sibenik" && key != "crytek_sponza_rotated";
-    return key == "living_room_3" && (builder == "kdbvh" || builder == "spatial");
+    return builder == "full" && key != "bunny" && key != "sibenik" && key != "crytek_sponza_rotated";
 }
 
 std::string sanitize(std::string text) {
