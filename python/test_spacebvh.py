@@ -171,6 +171,19 @@ class TracingTests(unittest.TestCase):
         self.assertEqual(stats["distinct_primitives"], self.scene.triangle_count - self.scene.degenerate_count)
         self.assertGreaterEqual(stats["epo"], 0.0)
         self.check_against_brute_force(spacebvh.Tracer(disjoint, "bvh8" if "bvh8" in spacebvh.kernels() else "binary"))
+        # The fast spatial variant (binned object search) and the spatial gate: other trees, same answers.
+        fast = spacebvh.build(self.scene, "spatial", search="binned,spatial")
+        self.assertNotEqual(fast.stats(), spacebvh.build(self.scene, "spatial").stats())
+        self.check_against_brute_force(spacebvh.Tracer(fast, "binary"))
+        # alpha = 1 asks for object overlap of the root's whole area: few spatial splits remain.
+        gated = spacebvh.build(self.scene, "spatial", spatial_gate=1.0)
+        ungated = spacebvh.build(self.scene, "spatial", spatial_gate=0.0)
+        self.assertLess(gated.reference_count, ungated.reference_count)
+        self.assertNotEqual(spacebvh.build(self.scene, "spatial", spatial_gate=0.0, spatial_bins=4).stats(), ungated.stats())
+        with self.assertRaisesRegex(spacebvh.Error, "sideways"):
+            spacebvh.build(self.scene, "spatial", search="sideways")
+        with self.assertRaisesRegex(spacebvh.Error, "gate"):
+            spacebvh.build(self.scene, "spatial", spatial_gate=math.nan)
 
     def test_same_tree_and_answers_for_any_thread_count(self):
         one = spacebvh.build(self.scene, "spatial", threads=1)
