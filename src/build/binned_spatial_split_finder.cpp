@@ -99,21 +99,15 @@ struct SpatialBins {
         std::vector<SimdBox>& boxes = bounds[axis];
         const __m128 on_axis = _mm_castsi128_ps(_mm_setr_epi32(axis == 0 ? -1 : 0, axis == 1 ? -1 : 0, axis == 2 ? -1 : 0, 0));
         const float axis_lo = limit_box.lo[axis], axis_hi = limit_box.hi[axis];
-        // Extends bin `bin` by the box of points lo..hi, clamped into the reference's bounds, at
-        // position x on the axis (in the bin's slab unless `outside`).
-        auto add_in_slab = [&](__m128 lo, __m128 hi, float x, uint32_t bin, bool outside) {
-            if (outside) return;
+        // The box of points lo..hi clamped into the reference's bounds, at position x on the axis.
+        auto clamped = [&](__m128 lo, __m128 hi, float x) {
             const __m128 position = _mm_and_ps(on_axis, _mm_set1_ps(x));
-            lo = _mm_or_ps(position, _mm_andnot_ps(on_axis, _mm_max_ps(_mm_min_ps(lo, limit.hi), limit.lo)));
-            hi = _mm_or_ps(position, _mm_andnot_ps(on_axis, _mm_max_ps(_mm_min_ps(hi, limit.hi), limit.lo)));
-            boxes[bin].lo = _mm_min_ps(boxes[bin].lo, lo);
-            boxes[bin].hi = _mm_max_ps(boxes[bin].hi, hi);
+            return SimdBox{_mm_or_ps(position, _mm_andnot_ps(on_axis, _mm_max_ps(_mm_min_ps(lo, limit.hi), limit.lo))),
+                           _mm_or_ps(position, _mm_andnot_ps(on_axis, _mm_max_ps(_mm_min_ps(hi, limit.hi), limit.lo)))};
         };
-        // The same where x may lie outside the bin's slab (a reference may end a hair short of an
-        // end bin, by bin_of's rounding): then the bin gets nothing.
-        auto add = [&](__m128 lo, __m128 hi, float x, uint32_t bin) {
-            add_in_slab(lo, hi, x, bin, x < binning.plane(bin) || x > binning.plane(bin + 1));
-        };
+        // Whether x lies in the bin's slab: a reference may end a hair short of an end bin (bin_of's
+        // rounding), and then that bin gets nothing.
+        auto in_slab = [&](float x, uint32_t bin) { return x >= binning.plane(bin) && x <= binning.plane(bin + 1); };
         // The vertices by ascending position on the axis: low, middle, high.
         Vec3 low = triangle.v0, middle = triangle.v1, high = triangle.v2;
         if (middle[axis] < low[axis]) std::swap(low, middle);
@@ -127,7 +121,7 @@ struct SpatialBins {
             while (bin < last && binning.plane(bin + 1) < x) ++bin;
             const float clamped_x = std::clamp(std::clamp(x, axis_lo, axis_hi), binning.plane(bin), binning.plane(bin + 1));
             const __m128 point = simd(vertex);
-            add(point, point, clamped_x, bin);
+            if (in_slab(clamped_x, bin)) boxes[bin].extend(clamped(point, point, clamped_x));
         }
         // Each inner plane cuts the triangle in a segment: from the long edge (low to high) to one of
         // the short ones. The segment belongs to both bins beside the plane.
@@ -138,29 +132,38 @@ struct SpatialBins {
         const float inverse_upper = x_high > x_middle ? 1.0f / (x_high - x_middle) : 0.0f;
         const __m128 low_point = simd(low), middle_point = simd(middle);
         const __m128 long_edge = simd(high - low), lower_edge = simd(middle - low), upper_edge = simd(high - middle);
+        // The segment on plane k goes to bins k - 1 and k; `carry` holds the one on plane k - 1 until
+        // bin k - 1 is extended by both, so each bin is read and written once.
+        SimdBox carry;
         for (uint32_t k = first + 1; k <= last; ++k) {
             const float plane = binning.plane(k);
-            if (!(plane >= x_low && plane <= x_high)) continue;
-            const float t_long = std::clamp((plane - x_low) * inverse_long, 0.0f, 1.0f);
-            const __m128 on_long = _mm_add_ps(low_point, _mm_mul_ps(long_edge, _mm_set1_ps(t_long)));
-            __m128 on_short;
-            if (plane <= x_middle && x_middle > x_low) {
-                const float t = std::clamp((plane - x_low) * inverse_lower, 0.0f, 1.0f);
-                on_short = _mm_add_ps(low_point, _mm_mul_ps(lower_edge, _mm_set1_ps(t)));
-            } else {
-                const float t = std::clamp((plane - x_middle) * inverse_upper, 0.0f, 1.0f);
-                on_short = _mm_add_ps(middle_point, _mm_mul_ps(upper_edge, _mm_set1_ps(t)));
+            SimdBox below, above;  // empty: plane k does not cut the triangle
+            if (plane >= x_low && plane <= x_high) {
+                const float t_long = std::clamp((plane - x_low) * inverse_long, 0.0f, 1.0f);
+                const __m128 on_long = _mm_add_ps(low_point, _mm_mul_ps(long_edge, _mm_set1_ps(t_long)));
+                __m128 on_short;
+                if (plane <= x_middle && x_middle > x_low) {
+                    const float t = std::clamp((plane - x_low) * inverse_lower, 0.0f, 1.0f);
+                    on_short = _mm_add_ps(low_point, _mm_mul_ps(lower_edge, _mm_set1_ps(t)));
+                } else {
+                    const float t = std::clamp((plane - x_middle) * inverse_upper, 0.0f, 1.0f);
+                    on_short = _mm_add_ps(middle_point, _mm_mul_ps(upper_edge, _mm_set1_ps(t)));
+                }
+                const __m128 lo = _mm_min_ps(on_long, on_short), hi = _mm_max_ps(on_long, on_short);
+                if (plane > axis_lo && plane < axis_hi) {  // the common case: in both slabs
+                    below = above = clamped(lo, hi, plane);
+                } else {
+                    const float x = std::clamp(plane, axis_lo, axis_hi);
+                    const SimdBox segment = clamped(lo, hi, x);
+                    if (in_slab(x, k - 1)) below = segment;
+                    if (in_slab(x, k)) above = segment;
+                }
             }
-            const __m128 lo = _mm_min_ps(on_long, on_short), hi = _mm_max_ps(on_long, on_short);
-            if (plane > axis_lo && plane < axis_hi) {  // the common case: no need to check the slabs
-                add_in_slab(lo, hi, plane, k - 1, false);
-                add_in_slab(lo, hi, plane, k, false);
-            } else {
-                const float x = std::clamp(plane, axis_lo, axis_hi);
-                add(lo, hi, x, k - 1);
-                add(lo, hi, x, k);
-            }
+            carry.extend(below);
+            boxes[k - 1].extend(carry);
+            carry = above;
         }
+        boxes[last].extend(carry);
     }
 
     void merge(const SpatialBins& other) {
