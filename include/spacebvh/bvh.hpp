@@ -79,7 +79,7 @@ struct BuildOptions {
     // Spatial planes are tried at a node only when the best object split's children overlap by at
     // least this fraction of SA(root) (Stich et al.'s alpha; 0 = at every node). Negative: the
     // preset's own: spatial 1e-4 (measured: same speed as 0, 1.5-2.5x faster builds), sbvh 1e-5 (as
-    // NVIDIA's builder), kdbvh and full 0 (no object split to gate on).
+    // NVIDIA's builder), kdbvh 0 (no object split to gate on) and full 0 (the paper's Full search).
     float spatial_gate_alpha = -1.0f;
     // Grid search space: a node of N references gets G = ceil(grid_resolution * N^(1/6)) cells per axis
     // (the slides' G = R N^(1/6)), at least 2 and at most grid_max_cells (work ~20 G^6 per node).

@@ -229,9 +229,10 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<
             left_count += grid.enter[axis][i - 1];
             const uint32_t count_right = suffix_counts[i];
             if (left_count == 0 || count_right == 0) continue;
-            // Without spare capacity (searched then only when no other space offered a split, as in
-            // kdbvh) the plane is still a candidate: apply_split sends the straddlers it cannot
-            // duplicate whole to their cheaper side (the budget always holds).
+            // Without spare capacity (searched then only where no other space offered a split, as in
+            // kdbvh, or the node must split and no offered split beats a leaf: spatial_search_gated_off)
+            // the plane is still a candidate: apply_split sends the straddlers it cannot duplicate
+            // whole to their cheaper side (the budget always holds).
             const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
             if (split_cost < sink.threshold(axis))
                 sink.offer(spatial_split(split_cost, axis, binning.plane(i), left, left_count, suffix_bounds[i], count_right,

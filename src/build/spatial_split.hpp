@@ -48,7 +48,7 @@ inline bool spatial_search_gated_off(const NodeContext& context, const CostModel
     if (context.must_split && !(best.cost < cost.leaf_cost(context.references.size()))) return false;
     if (context.capacity <= context.references.size()) return true;
     if (!(alpha > 0.0f)) return false;
-    const AABB overlap = intersect(context.best_so_far.left_bounds, context.best_so_far.right_bounds);
+    const AABB overlap = intersect(best.left_bounds, best.right_bounds);
     return overlap.is_empty() || overlap.area() < alpha * context.root_area;
 }
 
