@@ -99,6 +99,47 @@ template <bool kAnyHit, int W>
     }
 }
 
+// The closest-hit visit order of visits_after as one integer: the entry distance's bits made
+// order-preserving (negative distances flipped), then the slot reversed, so ascending keys are the
+// visit order (nearest first; equal distances: the later slot first).
+[[gnu::always_inline]] inline uint64_t visit_key(float entry, uint32_t slot) {
+    uint32_t bits;
+    std::memcpy(&bits, &entry, sizeof(bits));
+    bits ^= (bits & 0x80000000u) ? 0xffffffffu : 0x80000000u;
+    return (uint64_t(bits) << 32) | (0xffu - slot);
+}
+[[gnu::always_inline]] inline uint32_t visit_key_slot(uint64_t key) { return 0xffu - uint32_t(key & 0xffu); }
+
+[[gnu::always_inline]] inline void order_keys(uint64_t& a, uint64_t& b) {
+    const uint64_t low = a < b ? a : b, high = a < b ? b : a;
+    a = low;
+    b = high;
+}
+
+// Sorts n (3 <= n <= W) visit keys ascending. Up to four: the optimal five-exchange network on keys
+// padded with the largest key; more (8-wide nodes only): insertion sort.
+template <int W>
+[[gnu::always_inline]] inline void sort_visit_keys(uint64_t* key, int n) {
+    if (n <= 4) {
+        if (n == 3) key[3] = ~uint64_t(0);
+        order_keys(key[0], key[1]);
+        order_keys(key[2], key[3]);
+        order_keys(key[0], key[2]);
+        order_keys(key[1], key[3]);
+        order_keys(key[1], key[2]);
+        return;
+    }
+    for (int i = 1; i < n; ++i) {
+        const uint64_t k = key[i];
+        int j = i - 1;
+        while (j >= 0 && key[j] > k) {
+            key[j + 1] = key[j];
+            --j;
+        }
+        key[j + 1] = k;
+    }
+}
+
 template <int W>
 [[gnu::always_inline]] inline void prefetch_node(const WideNode<W>& node) {
     for (size_t line = 0; line < sizeof(WideNode<W>); line += 64)
@@ -201,34 +242,27 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                         current = second_entry;
                     }
                 } else {
-                    // Push every entered child in slot order, then insertion-sort them on the stack, the
-                    // child to visit next last (see visits_after); ties keep slot order reversed. Any
-                    // order is exact; this one is the same for every kernel width and ray.
-                    const int base = top;
-                    uint32_t slot[W];
-                    slot[0] = first;
-                    slot[1] = second;
-                    stack[top++] = first_entry;
-                    stack[top++] = second_entry;
+                    // Three or more: sort 64-bit keys (visit_key) in registers, then push all but the
+                    // first to visit, last-visited deepest. The keys order exactly as visits_after
+                    // (nearest first; ties: the later slot first) and sort with a branch-free network;
+                    // the insertion sort of 12-byte entries and slots it replaced was 11 % of the
+                    // closest-hit kernel's instructions (callgrind, rotated Sponza, BVH8).
+                    uint64_t key[W];
+                    int n = 0;
+                    key[n++] = visit_key(entry[first], first);
+                    key[n++] = visit_key(entry[second], second);
                     do {
                         const uint32_t lane = uint32_t(__builtin_ctz(mask));
                         mask &= mask - 1;
-                        slot[top - base] = lane;
-                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
+                        key[n++] = visit_key(entry[lane], lane);
                     } while (mask != 0);
-                    for (int i = 1; i < top - base; ++i) {
-                        const Entry key = stack[base + i];
-                        const uint32_t key_slot = slot[i];
-                        int j = i - 1;
-                        while (j >= 0 && visits_after<false>(node, key.entry, key_slot, stack[base + j].entry, slot[j])) {
-                            stack[base + j + 1] = stack[base + j];
-                            slot[j + 1] = slot[j];
-                            --j;
-                        }
-                        stack[base + j + 1] = key;
-                        slot[j + 1] = key_slot;
+                    sort_visit_keys<W>(key, n);
+                    for (int i = n - 1; i > 0; --i) {
+                        const uint32_t lane = visit_key_slot(key[i]);
+                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
                     }
-                    current = stack[--top];
+                    const uint32_t lane = visit_key_slot(key[0]);
+                    current = {node.child[lane], node.count[lane], entry[lane]};
                 }
                 prefetch_child(nodes, packs, current.child, current.count);
                 // The next pop is likely soon: fetch it too.
