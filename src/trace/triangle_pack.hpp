@@ -66,16 +66,24 @@ private:
 };
 
 // Per-ray constants of the four-wide watertight triangle test (the shear of WatertightRay, broadcast).
+// The origin is stored already permuted into the shear's axes (kx, ky, kz) and the axes as float
+// offsets into a vertex's planes, so the test reads them at fixed places: indexing by kx at every leaf
+// made the compiler recompute and spill the addresses per leaf visit.
 struct PackRay {
-    __m128 org[3];
+    __m128 org_x, org_y, org_z;
     __m128 shear_x, shear_y;
-    int kx = 0, ky = 1, kz = 2;
+    uint32_t plane_x = 0, plane_y = 4, plane_z = 8;
 
     PackRay() = default;
     explicit PackRay(const WatertightRay& w)
-        : shear_x(_mm_set1_ps(w.shear_x)), shear_y(_mm_set1_ps(w.shear_y)), kx(w.kx), ky(w.ky), kz(w.kz) {
-        for (int axis = 0; axis < 3; ++axis) org[axis] = _mm_set1_ps(w.org[axis]);
-    }
+        : org_x(_mm_set1_ps(w.org[w.kx])),
+          org_y(_mm_set1_ps(w.org[w.ky])),
+          org_z(_mm_set1_ps(w.org[w.kz])),
+          shear_x(_mm_set1_ps(w.shear_x)),
+          shear_y(_mm_set1_ps(w.shear_y)),
+          plane_x(uint32_t(4 * w.kx)),
+          plane_y(uint32_t(4 * w.ky)),
+          plane_z(uint32_t(4 * w.kz)) {}
 };
 
 struct PackEdges {
@@ -90,9 +98,10 @@ struct PackEdges {
 [[gnu::always_inline]] inline void pack_edges(const TrianglePack& pack, const PackRay& ray, PackEdges& edges) {
     __m128 sheared_x[3], sheared_y[3], magnitude = _mm_setzero_ps(), size = _mm_setzero_ps();
     for (int k = 0; k < 3; ++k) {
-        const __m128 px = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.kx]), ray.org[ray.kx]);
-        const __m128 py = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.ky]), ray.org[ray.ky]);
-        const __m128 pz = _mm_sub_ps(_mm_load_ps(pack.vertex[k][ray.kz]), ray.org[ray.kz]);
+        const float* planes = pack.vertex[k][0];
+        const __m128 px = _mm_sub_ps(_mm_load_ps(planes + ray.plane_x), ray.org_x);
+        const __m128 py = _mm_sub_ps(_mm_load_ps(planes + ray.plane_y), ray.org_y);
+        const __m128 pz = _mm_sub_ps(_mm_load_ps(planes + ray.plane_z), ray.org_z);
         const __m128 shift_x = _mm_mul_ps(ray.shear_x, pz), shift_y = _mm_mul_ps(ray.shear_y, pz);
         sheared_x[k] = _mm_sub_ps(px, shift_x);
         sheared_y[k] = _mm_sub_ps(py, shift_y);

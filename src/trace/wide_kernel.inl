@@ -230,17 +230,14 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 }
                 const uint32_t second = uint32_t(__builtin_ctz(mask));
                 mask &= mask - 1;
-                const Entry first_entry{node.child[first], node.count[first], entry[first]};
-                const Entry second_entry{node.child[second], node.count[second], entry[second]};
                 if (mask == 0) {
-                    // The order of the insertion sort below for two children (ties: the later slot first).
-                    if (visits_after<false>(node, second_entry.entry, second, first_entry.entry, first)) {
-                        stack[top++] = second_entry;
-                        current = first_entry;
-                    } else {
-                        stack[top++] = first_entry;
-                        current = second_entry;
-                    }
+                    // The order of visits_after (ties: the later slot first), chosen by selecting slots
+                    // rather than by a branch: which child is nearer is a coin toss the branch predictor
+                    // loses.
+                    const bool first_next = visits_after<false>(node, entry[second], second, entry[first], first);
+                    const uint32_t next = first_next ? first : second, later = first ^ second ^ next;
+                    stack[top++] = {node.child[later], node.count[later], entry[later]};
+                    current = {node.child[next], node.count[next], entry[next]};
                 } else {
                     // Three or more: sort 64-bit keys (visit_key) in registers, then push all but the
                     // first to visit, last-visited deepest. The keys order exactly as visits_after
