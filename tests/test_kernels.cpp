@@ -7,7 +7,9 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
+#include <random>
 #include <set>
 #include <string>
 #include <tuple>
@@ -22,6 +24,7 @@
 #include "spacebvh/wide_tracer.hpp"
 #include "test_support.hpp"
 #include "trace/triangle_pack.hpp"
+#include "trace/visit_order.hpp"
 
 using namespace spacebvh;
 using testing_support::cached_builtin_scene;
@@ -369,4 +372,40 @@ TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
             }
         }
     }
+}
+
+// The single-ray kernels order three or more entered children by sorting integer visit keys
+// (trace/visit_order.hpp): the order must be visits_after's, nearest first and, at equal distances,
+// the later slot first (-0 just before +0), for every count the 4- and 8-wide nodes produce.
+template <int W>
+void check_visit_key_order(std::mt19937& random) {
+    const float distances[] = {-2.5f, -0.0f, 0.0f, 1e-30f, 0.5f, 0.5f, 3.0f, 1e30f};
+    std::uniform_int_distribution<int> pick(0, 7);
+    for (int trial = 0; trial < 2000; ++trial) {
+        const int n = 3 + trial % (W - 2);
+        std::vector<uint32_t> slots(W);
+        std::iota(slots.begin(), slots.end(), 0u);
+        std::shuffle(slots.begin(), slots.end(), random);
+        slots.resize(size_t(n));
+        float entry[W] = {};
+        for (uint32_t slot : slots) entry[slot] = distances[pick(random)];
+        uint64_t key[W];
+        for (int i = 0; i < n; ++i) key[i] = trace::visit_key(entry[slots[size_t(i)]], slots[size_t(i)]);
+        trace::sort_visit_keys<W>(key, n);
+
+        std::vector<uint32_t> expected = slots;
+        std::sort(expected.begin(), expected.end(), [&](uint32_t a, uint32_t b) {
+            if (entry[a] != entry[b]) return entry[a] < entry[b];
+            if (std::signbit(entry[a]) != std::signbit(entry[b])) return std::signbit(entry[a]);
+            return a > b;
+        });
+        for (int i = 0; i < n; ++i)
+            ASSERT_EQ(trace::visit_key_slot(key[i]), expected[size_t(i)]) << "W " << W << ", trial " << trial << ", position " << i;
+    }
+}
+
+TEST(Kernels, VisitKeysSortInTheClosestHitVisitOrder) {
+    std::mt19937 random(7);
+    check_visit_key_order<4>(random);
+    check_visit_key_order<8>(random);
 }

@@ -6,11 +6,11 @@
 #include <immintrin.h>
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "trace/kernels.hpp"
 #include "trace/traversal_common.hpp"
+#include "trace/visit_order.hpp"
 #include "trace/watertight_triangle.hpp"
 #include "trace/wide_layout.hpp"
 

@@ -99,47 +99,6 @@ template <bool kAnyHit, int W>
     }
 }
 
-// The closest-hit visit order of visits_after as one integer: the entry distance's bits made
-// order-preserving (negative distances flipped), then the slot reversed, so ascending keys are the
-// visit order (nearest first; equal distances: the later slot first).
-[[gnu::always_inline]] inline uint64_t visit_key(float entry, uint32_t slot) {
-    uint32_t bits;
-    std::memcpy(&bits, &entry, sizeof(bits));
-    bits ^= (bits & 0x80000000u) ? 0xffffffffu : 0x80000000u;
-    return (uint64_t(bits) << 32) | (0xffu - slot);
-}
-[[gnu::always_inline]] inline uint32_t visit_key_slot(uint64_t key) { return 0xffu - uint32_t(key & 0xffu); }
-
-[[gnu::always_inline]] inline void order_keys(uint64_t& a, uint64_t& b) {
-    const uint64_t low = a < b ? a : b, high = a < b ? b : a;
-    a = low;
-    b = high;
-}
-
-// Sorts n (3 <= n <= W) visit keys ascending. Up to four: the optimal five-exchange network on keys
-// padded with the largest key; more (8-wide nodes only): insertion sort.
-template <int W>
-[[gnu::always_inline]] inline void sort_visit_keys(uint64_t* key, int n) {
-    if (n <= 4) {
-        if (n == 3) key[3] = ~uint64_t(0);
-        order_keys(key[0], key[1]);
-        order_keys(key[2], key[3]);
-        order_keys(key[0], key[2]);
-        order_keys(key[1], key[3]);
-        order_keys(key[1], key[2]);
-        return;
-    }
-    for (int i = 1; i < n; ++i) {
-        const uint64_t k = key[i];
-        int j = i - 1;
-        while (j >= 0 && key[j] > k) {
-            key[j + 1] = key[j];
-            --j;
-        }
-        key[j + 1] = k;
-    }
-}
-
 template <int W>
 [[gnu::always_inline]] inline void prefetch_node(const WideNode<W>& node) {
     for (size_t line = 0; line < sizeof(WideNode<W>); line += 64)
@@ -232,18 +191,17 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 mask &= mask - 1;
                 if (mask == 0) {
                     // The order of visits_after (ties: the later slot first), chosen by selecting slots
-                    // rather than by a branch: which child is nearer is a coin toss the branch predictor
-                    // loses.
+                    // rather than by a branch (which child is nearer is a coin toss for the branch
+                    // predictor; measured no faster, and no slower).
                     const bool first_next = visits_after<false>(node, entry[second], second, entry[first], first);
                     const uint32_t next = first_next ? first : second, later = first ^ second ^ next;
                     stack[top++] = {node.child[later], node.count[later], entry[later]};
                     current = {node.child[next], node.count[next], entry[next]};
                 } else {
-                    // Three or more: sort 64-bit keys (visit_key) in registers, then push all but the
-                    // first to visit, last-visited deepest. The keys order exactly as visits_after
-                    // (nearest first; ties: the later slot first) and sort with a branch-free network;
-                    // the insertion sort of 12-byte entries and slots it replaced was 11 % of the
-                    // closest-hit kernel's instructions (callgrind, rotated Sponza, BVH8).
+                    // Three or more: sort their visit keys (visit_order.hpp: visits_after's order as
+                    // integers), then push all but the first to visit, the last to visit deepest. The
+                    // insertion sort of 12-byte stack entries it replaced was 11 % of the closest-hit
+                    // kernel's instructions (callgrind, AVX2 BVH8, rotated Sponza).
                     uint64_t key[W];
                     int n = 0;
                     key[n++] = visit_key(entry[first], first);
