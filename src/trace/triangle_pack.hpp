@@ -98,7 +98,7 @@ struct PackEdges {
 [[gnu::always_inline]] inline void pack_edges(const TrianglePack& pack, const PackRay& ray, PackEdges& edges) {
     __m128 sheared_x[3], sheared_y[3], magnitude = _mm_setzero_ps(), size = _mm_setzero_ps();
     for (int k = 0; k < 3; ++k) {
-        const float* planes = pack.vertex[k][0];
+        const float* planes = pack.vertex[k][0];  // vertex k's three planes, contiguous (float[3][4])
         const __m128 px = _mm_sub_ps(_mm_load_ps(planes + ray.plane_x), ray.org_x);
         const __m128 py = _mm_sub_ps(_mm_load_ps(planes + ray.plane_y), ray.org_y);
         const __m128 pz = _mm_sub_ps(_mm_load_ps(planes + ray.plane_z), ray.org_z);

@@ -1,5 +1,6 @@
-// The closest-hit order in which the single-ray wide kernels visit the children a ray enters, as
-// integer keys that sort without branches (wide_kernel.inl: visits_after is the same order).
+// The closest-hit order in which the single-ray wide kernels visit three or more children a ray
+// enters, as integer keys that sort without branches. It is visits_after's order (wide_kernel.inl,
+// which orders two children by comparing the floats), except that visits_after ties -0 with +0.
 #pragma once
 
 #include <cstdint>
