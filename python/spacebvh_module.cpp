@@ -340,6 +340,32 @@ PYBIND11_MODULE(spacebvh, m) {
         "The primary rays of ../shared/spec/rays.md, row by row from the top: (origins, directions) arrays. camera: "
         "'ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy' (the MANIFEST's values), default the spec's camera for the scene.");
     m.def(
+        "diffuse_rays",
+        [](const Scene& scene, const FloatArray& origins, const FloatArray& directions, const FloatArray& t,
+           const IndexArray& primitive, uint64_t seed, float epsilon) {
+            if (!(std::isfinite(epsilon) && epsilon >= 0.0f))
+                throw Error("epsilon must be finite and >= 0 (0: the spec's default, 1e-4 x |scene diagonal|), not " +
+                            std::to_string(epsilon));
+            const std::vector<Ray> primary = make_rays(origins, directions, py::float_(0.0), py::float_(kInfinity));
+            const std::vector<HitRecord> records = make_hit_records(t, primitive);
+            if (records.size() != primary.size())
+                throw Error(std::to_string(primary.size()) + " primary rays but " + std::to_string(records.size()) + " hits");
+            std::vector<Hit> hits(records.size());
+            for (size_t i = 0; i < records.size(); ++i) {
+                if (records[i].primitive == kInvalidIndex) continue;
+                if (!std::isfinite(records[i].t) || records[i].t < 0.0f)
+                    throw Error("hit " + std::to_string(i) + ": a hit needs a finite t >= 0, not " + std::to_string(records[i].t));
+                hits[i].t = records[i].t;
+                hits[i].primitive = records[i].primitive;
+            }
+            return rays_as_arrays(generate_diffuse_rays(scene, primary, hits, seed, epsilon));
+        },
+        py::arg("scene"), py::arg("origins"), py::arg("directions"), py::arg("t"), py::arg("primitive"),
+        py::arg("seed") = 1, py::arg("epsilon") = 0.0f,
+        "The diffuse rays of ../shared/spec/rays.md: one cosine-distributed bounce per primary ray that hits (t, "
+        "primitive: intersect()'s answers for those rays, primitive -1 = a miss), in primary order, leaving the "
+        "surface at epsilon along its normal (0: the spec's default). Returns (origins, directions) arrays.");
+    m.def(
         "read_rays", [](const std::string& path) { return rays_as_arrays(read_ray_file(path), true); }, py::arg("path"),
         "A ray file of ../shared/spec/rays.md: (origins, directions, tmin, tmax) arrays.");
     m.def(

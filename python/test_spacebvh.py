@@ -4,6 +4,7 @@ PYTHONPATH: python3 python/test_spacebvh.py"""
 import math
 import os
 import pathlib
+import subprocess
 import tempfile
 import unittest
 
@@ -216,6 +217,79 @@ class TracingTests(unittest.TestCase):
         bad[5] = -1.0
         with self.assertRaisesRegex(spacebvh.Error, "ray 5"):
             tracer.occluded(self.origins, self.directions, 0.0, bad)
+
+    def test_diffuse_rays_follow_the_spec(self):
+        # A floor of two triangles and a slanted triangle above it, seen from above: every primary
+        # hit's normal is known here, independently of the module.
+        vertices = np.array([[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4],
+                             [-1, 1, -1], [1, 1, -1], [0, 2, 1]], dtype=np.float32)
+        indices = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6]])
+        scene = spacebvh.mesh(vertices, indices)
+        tracer = spacebvh.Tracer(spacebvh.build(scene, "cbvh"))
+        origins, directions = spacebvh.primary_rays(scene, 24, 24, camera="0,6,3,0,0,0,0,1,0,70")
+        t, prim, _, _ = tracer.intersect(origins, directions)
+        hit = prim >= 0
+        self.assertGreater(np.count_nonzero(hit), 100)
+        self.assertGreater(np.count_nonzero(~hit), 0)
+        self.assertGreater(np.count_nonzero(prim == 2), 10)
+
+        org, dirs = spacebvh.diffuse_rays(scene, origins, directions, t, prim, seed=3)
+        self.assertEqual(org.shape, (np.count_nonzero(hit), 3))
+        tri = vertices[indices[prim[hit]]].astype(np.float64)
+        normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
+        facing = np.einsum("ij,ij->i", normal, directions[hit]) > 0
+        normal[facing] *= -1  # turned against the primary ray
+        lo, hi = np.array(scene.bounds)
+        epsilon = 1e-4 * np.linalg.norm(hi - lo)
+        surface = origins[hit].astype(np.float64) + directions[hit] * t[hit][:, None]
+        np.testing.assert_allclose(org, surface + normal * epsilon, rtol=0, atol=1e-5)
+        np.testing.assert_allclose(np.linalg.norm(dirs, axis=1), 1.0, rtol=1e-5)
+        self.assertTrue(np.all(np.einsum("ij,ij->i", dirs, normal) >= -1e-6))  # leaves the surface
+        # Cosine distributed: the mean cosine to the normal is 2/3 (about 400 rays: within 0.06).
+        self.assertAlmostEqual(float(np.mean(np.einsum("ij,ij->i", dirs, normal))), 2.0 / 3.0, delta=0.06)
+
+        again, again_dirs = spacebvh.diffuse_rays(scene, origins, directions, t, prim, seed=3)
+        np.testing.assert_array_equal(again, org)
+        np.testing.assert_array_equal(again_dirs, dirs)
+        _, other_dirs = spacebvh.diffuse_rays(scene, origins, directions, t, prim, seed=4)
+        self.assertFalse(np.array_equal(other_dirs, dirs))
+        offset, _ = spacebvh.diffuse_rays(scene, origins, directions, t, prim, seed=3, epsilon=0.5)
+        np.testing.assert_allclose(offset, surface + normal * 0.5, rtol=0, atol=1e-5)
+
+        with self.assertRaisesRegex(spacebvh.Error, "primary rays but"):
+            spacebvh.diffuse_rays(scene, origins, directions, t[:-1], prim[:-1])
+        bad = prim.copy()
+        bad[np.argmax(hit)] = 3
+        with self.assertRaisesRegex(spacebvh.Error, "names triangle 3"):
+            spacebvh.diffuse_rays(scene, origins, directions, t, bad)
+        bad_t = t.copy()
+        bad_t[np.argmax(hit)] = np.inf
+        with self.assertRaisesRegex(spacebvh.Error, "finite t"):
+            spacebvh.diffuse_rays(scene, origins, directions, bad_t, prim)
+        for epsilon in (-1.0, np.nan, np.inf):
+            with self.assertRaisesRegex(spacebvh.Error, "epsilon"):
+                spacebvh.diffuse_rays(scene, origins, directions, t, prim, epsilon=epsilon)
+
+    def test_diffuse_rays_equal_the_command_line_tools(self):
+        # The same spec, two front ends: `spacebvh rays --kind diffuse` and diffuse_rays() over the
+        # module's own primary hits give the same rays, bit for bit. CTest names the CLI.
+        cli = os.environ.get("SPACEBVH_CLI")
+        if not cli:
+            self.skipTest("SPACEBVH_CLI (the spacebvh command) not set; CTest sets it")
+        with tempfile.TemporaryDirectory() as folder:
+            primary_path, diffuse_path = os.path.join(folder, "p.rays"), os.path.join(folder, "d.rays")
+            for kind, path in (("primary", primary_path), ("diffuse", diffuse_path)):
+                subprocess.run([cli, "rays", "builtin:organic", "--kind", kind, "--seed", "5", "--width", "64",
+                                "--height", "48", "-o", path, "-q"], check=True, capture_output=True)
+            origins, directions, _, _ = spacebvh.read_rays(primary_path)
+            expected_origins, expected_directions, _, _ = spacebvh.read_rays(diffuse_path)
+        scene = spacebvh.load_scene("builtin:organic")
+        t, prim, _, _ = spacebvh.Tracer(spacebvh.build(scene, "binned")).intersect(origins, directions)
+        diffuse_origins, diffuse_directions = spacebvh.diffuse_rays(scene, origins, directions, t, prim, seed=5)
+        self.assertGreater(len(expected_origins), 100)
+        np.testing.assert_array_equal(diffuse_origins, expected_origins)
+        np.testing.assert_array_equal(diffuse_directions, expected_directions)
 
     def test_ray_and_hit_files(self):
         tracer = spacebvh.Tracer(spacebvh.build(self.scene, "binned"), "binary")
