@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,8 @@
 #include "spacebvh/rays.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
+#include "embree/embree_builder.hpp"
+#include "embree/embree_scene.hpp"
 
 namespace py = pybind11;
 using namespace spacebvh;
@@ -97,7 +100,12 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
             float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
             float reference_budget, const std::string& search, uint32_t spatial_bins, std::optional<float> spatial_gate,
             uint32_t optimize, int threads) {
-    BuildOptions options = options_for(builder);
+    // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
+    // optimiser apply to them, our search options do not.
+    const bool embree_tree = builder == "embree-medium" || builder == "embree-high";
+    if (embree_tree && (!search.empty() || spatial_gate))
+        throw Error("search and spatial_gate apply to our builders, not to Embree's tree '" + builder + "'");
+    BuildOptions options = options_for(embree_tree ? "binned" : builder);
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
     options.spatial_bins = spatial_bins;
     if (spatial_gate) options.spatial_gate_alpha = *spatial_gate;
@@ -112,7 +120,14 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
     auto bvh = std::make_shared<Bvh>();
     {
         py::gil_scoped_release unlocked;
-        in_arena(threads, [&] { *bvh = build_bvh(*scene, options); });
+        in_arena(threads, [&] {
+            if (embree_tree) {
+                *bvh = build_bvh_with_embree(*scene, parse_embree_quality(builder.substr(std::string("embree-").size())), options);
+                optimize_bvh(*bvh, options);
+            } else {
+                *bvh = build_bvh(*scene, options);
+            }
+        });
     }
     return {std::move(scene), std::move(bvh)};
 }
@@ -137,16 +152,9 @@ py::dict stats_of(const PyBvh& tree, bool with_epo) {
     return result;
 }
 
-// Closest hits: (t, primitive, u, v) arrays; a miss has t = inf and primitive = -1.
-py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
-                       const py::object& tmax) {
-    const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
-    std::vector<Hit> hits(rays.size());
-    {
-        py::gil_scoped_release unlocked;
-        in_arena(self.threads, [&] { self.tracer->intersect(rays, hits); });
-    }
-    const py::ssize_t n = py::ssize_t(rays.size());
+// Closest hits as (t, primitive, u, v) arrays; a miss has t = inf and primitive = -1.
+py::tuple hits_as_arrays(const std::vector<Hit>& hits) {
+    const py::ssize_t n = py::ssize_t(hits.size());
     py::array_t<float> t(n), u(n), v(n);
     py::array_t<int64_t> primitive(n);
     float* t_out = t.mutable_data();
@@ -163,18 +171,62 @@ py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const Fl
     return py::make_tuple(t, primitive, u, v);
 }
 
-py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions,
-                           const py::object& tmin, const py::object& tmax) {
-    const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
-    std::vector<uint8_t> answers(rays.size());
-    {
-        py::gil_scoped_release unlocked;
-        in_arena(self.threads, [&] { self.tracer->occluded(rays, answers); });
-    }
-    py::array_t<bool> result(py::ssize_t(rays.size()));
+py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers) {
+    py::array_t<bool> result(py::ssize_t(answers.size()));
     bool* out = result.mutable_data();
     for (size_t i = 0; i < answers.size(); ++i) out[i] = answers[i] != 0;
     return result;
+}
+
+// Makes rays from the arrays (make_rays), then answers them with trace(rays, answers) outside the
+// GIL on `threads` threads (0: all).
+template <class Answer, class Trace>
+std::vector<Answer> trace_arrays(int threads, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
+                                 const py::object& tmax, Trace&& trace) {
+    const std::vector<Ray> rays = make_rays(origins, directions, tmin, tmax);
+    std::vector<Answer> answers(rays.size());
+    {
+        py::gil_scoped_release unlocked;
+        in_arena(threads, [&] { trace(std::span<const Ray>(rays), std::span<Answer>(answers)); });
+    }
+    return answers;
+}
+
+py::tuple closest_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
+                       const py::object& tmax) {
+    return hits_as_arrays(trace_arrays<Hit>(self.threads, origins, directions, tmin, tmax,
+                                            [&](auto rays, auto hits) { self.tracer->intersect(rays, hits); }));
+}
+
+py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, const FloatArray& directions,
+                           const py::object& tmin, const py::object& tmax) {
+    return answers_as_array(trace_arrays<uint8_t>(self.threads, origins, directions, tmin, tmax,
+                                                  [&](auto rays, auto answers) { self.tracer->occluded(rays, answers); }));
+}
+
+// Embree 3's own scene and kernel on the same rays: the yardstick of every benchmark. Single rays
+// (rtcIntersect1 / rtcOccluded1) or 16-wide packets (rtcIntersect16 / rtcOccluded16). Embree is not
+// watertight: near edges and vertices its answers may differ from ours (the arbiter of rays.md
+// settles such cases in our favour).
+struct PyEmbreeTracer {
+    std::shared_ptr<Scene> scene;
+    std::unique_ptr<EmbreeScene> embree;
+    bool packets = false;
+    int threads = 0;
+};
+
+py::tuple embree_closest_hits(const PyEmbreeTracer& self, const FloatArray& origins, const FloatArray& directions,
+                              const py::object& tmin, const py::object& tmax) {
+    return hits_as_arrays(trace_arrays<Hit>(self.threads, origins, directions, tmin, tmax, [&](auto rays, auto hits) {
+        self.packets ? self.embree->intersect16(rays, hits) : self.embree->intersect(rays, hits);
+    }));
+}
+
+py::array_t<bool> embree_any_hits(const PyEmbreeTracer& self, const FloatArray& origins, const FloatArray& directions,
+                                  const py::object& tmin, const py::object& tmax) {
+    return answers_as_array(trace_arrays<uint8_t>(self.threads, origins, directions, tmin, tmax, [&](auto rays, auto answers) {
+        self.packets ? self.embree->occluded16(rays, answers) : self.embree->occluded(rays, answers);
+    }));
 }
 
 // (origins, directions) of generated rays (tmin = 0, tmax = inf by the spec), or with their
@@ -290,7 +342,11 @@ PYBIND11_MODULE(spacebvh, m) {
         py::arg("vertices"), py::arg("indices"), py::arg("name") = "mesh",
         "A scene from an indexed mesh: vertices (n, 3) floats, indices (m, 3) 0-based vertex indices.");
     m.def("builtin_scenes", &builtin_scene_names);
-    m.def("builders", &builder_names);
+    m.def("builders", [] {
+        std::vector<std::string> names = builder_names();
+        names.insert(names.end(), {"embree-medium", "embree-high"});  // Embree 3's own binary trees
+        return names;
+    });
     m.def("kernels", &kernel_names);
 
     py::class_<PyBvh>(m, "Bvh", "A binary BVH and the scene it was built over.")
@@ -325,6 +381,32 @@ PYBIND11_MODULE(spacebvh, m) {
              "Closest hits within [tmin, tmax] (numbers, or arrays of one per ray): arrays t, primitive (-1 on a miss), u, v.")
         .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
              py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax] (numbers, or arrays of one per ray): a bool array.");
+
+    py::class_<PyEmbreeTracer>(m, "EmbreeTracer",
+                               "Embree 3's own BVH and kernel over a scene, on the same numpy rays (not watertight).")
+        .def(py::init([](std::shared_ptr<Scene> scene, const std::string& quality, bool packets, int threads) {
+                 const EmbreeQuality level = parse_embree_quality(quality);
+                 std::unique_ptr<EmbreeScene> embree;
+                 {
+                     py::gil_scoped_release unlocked;
+                     in_arena(threads, [&] { embree = std::make_unique<EmbreeScene>(*scene, level); });
+                 }
+                 return PyEmbreeTracer{std::move(scene), std::move(embree), packets, threads};
+             }),
+             py::arg("scene"), py::arg("quality") = "high", py::arg("packets") = false, py::arg("threads") = 0,
+             "quality: 'low', 'medium' or 'high' (RTC_BUILD_QUALITY_*); packets: rtcIntersect16/rtcOccluded16 over "
+             "groups of 16 consecutive rays instead of single rays.")
+        .def_property_readonly("kernel",
+                               [](const PyEmbreeTracer& self) {
+                                   return std::string("embree-") + to_string(self.embree->quality()) +
+                                          (self.packets ? " rtcIntersect16" : " rtcIntersect1");
+                               })
+        .def_property_readonly("build_ms", [](const PyEmbreeTracer& self) { return self.embree->build_milliseconds(); })
+        .def_property_readonly("memory_bytes", [](const PyEmbreeTracer& self) { return self.embree->memory_bytes(); })
+        .def("intersect", &embree_closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
+             py::arg("tmax") = kInfinity, "As Tracer.intersect: arrays t, primitive (-1 on a miss), u, v.")
+        .def("occluded", &embree_any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
+             py::arg("tmax") = kInfinity, "As Tracer.occluded: a bool array.");
 
     m.def(
         "random_rays",
