@@ -8,6 +8,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -19,6 +20,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/metrics.hpp"
 #include "spacebvh/rays.hpp"
+#include "spacebvh/render.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
 #include "embree/embree_builder.hpp"
@@ -204,6 +206,49 @@ py::array_t<bool> any_hits(const PyTracer& self, const FloatArray& origins, cons
                                                   [&](auto rays, auto answers) { self.tracer->occluded(rays, answers); }));
 }
 
+// An Image as a (height, width, 3) uint8 array (row 0 at the top).
+py::array_t<uint8_t> image_as_array(const Image& image) {
+    py::array_t<uint8_t> out({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
+    std::copy(image.rgb.begin(), image.rgb.end(), out.mutable_data());
+    return out;
+}
+
+// The shaded view (heatmap=False) or the traversal-cost heat map of the primary rays, as the CLI's
+// `render`; the heat map also returns its scale and totals.
+py::object render(const PyTracer& self, uint32_t width, uint32_t height, const std::string& camera, bool heatmap,
+                  const std::string& quantity, double percentile, double scale_max, bool legend) {
+    const Camera view = camera.empty() ? default_camera(*self.scene) : Camera::parse(camera);
+    HeatmapOptions options;
+    if (quantity == "work") options.quantity = HeatmapQuantity::work;
+    else if (quantity == "nodes") options.quantity = HeatmapQuantity::nodes_visited;
+    else if (quantity == "triangles") options.quantity = HeatmapQuantity::triangles_tested;
+    else throw Error("quantity must be work, nodes or triangles, not '" + quantity + "'");
+    if (!(percentile > 0.0 && percentile <= 1.0)) throw Error("percentile must be in (0, 1], not " + std::to_string(percentile));
+    if (!(std::isfinite(scale_max) && scale_max >= 0.0))
+        throw Error("scale_max must be finite and >= 0 (0: from the percentile), not " + std::to_string(scale_max));
+    options.percentile = percentile;
+    options.scale_max = scale_max;
+    options.legend = legend;
+    Image image;
+    HeatmapInfo info;
+    {
+        py::gil_scoped_release unlocked;
+        in_arena(self.threads, [&] {
+            image = heatmap ? render_heatmap(*self.scene, *self.tracer, view, width, height, &info, options)
+                            : render_shaded(*self.scene, *self.tracer, view, width, height);
+        });
+    }
+    if (!heatmap) return image_as_array(image);
+    py::dict details;
+    details["scale_max"] = info.scale_max;
+    details["max_value"] = info.max_value;
+    details["mean_value"] = info.mean_value;
+    details["nodes_visited"] = info.totals.nodes_visited;
+    details["triangles_tested"] = info.totals.triangles_tested;
+    details["legend_height"] = info.legend_height;
+    return py::make_tuple(image_as_array(image), details);
+}
+
 // Embree 3's own scene and kernel on the same rays: the yardstick of every benchmark. Single rays
 // (rtcIntersect1 / rtcOccluded1) or 16-wide packets (rtcIntersect16 / rtcOccluded16). Embree is not
 // watertight: near edges and vertices its answers may differ from ours (the arbiter of rays.md
@@ -380,7 +425,24 @@ PYBIND11_MODULE(spacebvh, m) {
              py::arg("tmax") = kInfinity,
              "Closest hits within [tmin, tmax] (numbers, or arrays of one per ray): arrays t, primitive (-1 on a miss), u, v.")
         .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f,
-             py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax] (numbers, or arrays of one per ray): a bool array.");
+             py::arg("tmax") = kInfinity, "Any hit within [tmin, tmax] (numbers, or arrays of one per ray): a bool array.")
+        .def("render", &render, py::arg("width") = 512u, py::arg("height") = 512u, py::arg("camera") = "", py::kw_only(),
+             py::arg("heatmap") = false, py::arg("quantity") = "work", py::arg("percentile") = 0.99, py::arg("scale_max") = 0.0,
+             py::arg("legend") = true,
+             "The CLI's render through this tracer, with primary_rays()'s camera: a (height, width, 3) uint8 shaded "
+             "image; with heatmap=True the per-pixel traversal cost (quantity: work, nodes or triangles; the ramp's top "
+             "at the percentile, or at scale_max > 0 to share a scale; legend rows appended below) and a dict of its "
+             "scale and totals.");
+    m.def(
+        "write_png",
+        [](const std::string& path, const py::array_t<uint8_t, py::array::c_style | py::array::forcecast>& pixels) {
+            if (pixels.ndim() != 3 || pixels.shape(2) != 3 || pixels.shape(0) == 0 || pixels.shape(1) == 0)
+                throw Error("write_png needs a (height, width, 3) uint8 array");
+            Image image(uint32_t(pixels.shape(1)), uint32_t(pixels.shape(0)));
+            std::copy(pixels.data(), pixels.data() + image.rgb.size(), image.rgb.begin());
+            write_png(path, image);
+        },
+        py::arg("path"), py::arg("pixels"), "Writes a (height, width, 3) uint8 array, e.g. render()'s, as a PNG file.");
 
     py::class_<PyEmbreeTracer>(m, "EmbreeTracer",
                                "Embree 3's own BVH and kernel over a scene, on the same numpy rays (not watertight).")

@@ -318,6 +318,51 @@ class TracingTests(unittest.TestCase):
         np.testing.assert_array_equal(diffuse_origins, expected_origins)
         np.testing.assert_array_equal(diffuse_directions, expected_directions)
 
+    def test_render_and_heat_map(self):
+        scene = spacebvh.load_scene("builtin:organic")
+        tracer = spacebvh.Tracer(spacebvh.build(scene, "binned"), "bvh8")
+        camera = "0,0,14,0,0,0,0,1,0,60"  # the mesh fills about a sixth of the view
+        image = tracer.render(40, 30, camera)
+        self.assertEqual(image.shape, (30, 40, 3))
+        self.assertEqual(image.dtype, np.uint8)
+        # Pixel by pixel as primary_rays() and intersect() see it: a hit is lit by the headlight (a warm
+        # white scaled by 0.12 + 0.88 |cos|, so never darker than 0.12 of it), a miss the background.
+        origins, directions = spacebvh.primary_rays(scene, 40, 30, camera=camera)
+        _, prim, _, _ = tracer.intersect(origins, directions)
+        hit = (prim >= 0).reshape(30, 40)
+        self.assertGreater(np.count_nonzero(hit), 50)
+        self.assertGreater(np.count_nonzero(~hit), 50)
+        background = image[~hit]
+        self.assertTrue(np.all(background == background[0]))
+        lit = image[hit].astype(int)
+        self.assertTrue(np.all((lit[:, 0] >= lit[:, 1]) & (lit[:, 1] >= lit[:, 2]) & (lit[:, 0] >= 30)))
+        self.assertFalse(np.any(np.all(lit == background[0], axis=1)))
+        self.assertGreater(lit[:, 0].max() - lit[:, 0].min(), 50)  # shading varies over the curved mesh
+
+        heat, info = tracer.render(40, 30, camera, heatmap=True)
+        self.assertEqual(heat.shape, (30 + info["legend_height"], 40, 3))
+        self.assertGreater(info["legend_height"], 0)
+        self.assertGreater(info["nodes_visited"], 1200)  # every pixel tests at least the root's boxes
+        self.assertGreater(info["max_value"], info["mean_value"])
+        shared, shared_info = tracer.render(40, 30, camera, heatmap=True, quantity="nodes", scale_max=500.0, legend=False)
+        self.assertEqual(shared.shape, (30, 40, 3))
+        self.assertEqual(shared_info["scale_max"], 500.0)
+        self.assertEqual(shared_info["triangles_tested"], info["triangles_tested"])
+        for bad in ({"quantity": "time"}, {"percentile": 0.0}, {"scale_max": -1.0}):
+            with self.assertRaises(spacebvh.Error):
+                tracer.render(40, 30, camera, heatmap=True, **bad)
+        with self.assertRaises(spacebvh.Error):
+            tracer.render(0, 30, camera)
+
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, "view.png")
+            spacebvh.write_png(path, image)
+            self.assertEqual(pathlib.Path(path).read_bytes()[:8], b"\x89PNG\r\n\x1a\n")
+            with self.assertRaisesRegex(spacebvh.Error, "height, width, 3"):
+                spacebvh.write_png(path, image[:, :, :2])
+            with self.assertRaisesRegex(spacebvh.Error, "nowhere"):
+                spacebvh.write_png(os.path.join(folder, "nowhere", "x.png"), image)
+
     def test_ray_and_hit_files(self):
         tracer = spacebvh.Tracer(spacebvh.build(self.scene, "binned"), "binary")
         n = 200
