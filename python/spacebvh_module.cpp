@@ -104,7 +104,7 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
             uint32_t optimize, int threads) {
     // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
     // optimiser apply to them, our search options do not.
-    const bool embree_tree = builder == "embree-medium" || builder == "embree-high";
+    const bool embree_tree = is_embree_tree(builder);
     if (embree_tree && (!search.empty() || spatial_gate))
         throw Error("search and spatial_gate apply to our builders, not to Embree's tree '" + builder + "'");
     BuildOptions options = options_for(embree_tree ? "binned" : builder);
@@ -123,12 +123,7 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
     {
         py::gil_scoped_release unlocked;
         in_arena(threads, [&] {
-            if (embree_tree) {
-                *bvh = build_bvh_with_embree(*scene, parse_embree_quality(builder.substr(std::string("embree-").size())), options);
-                optimize_bvh(*bvh, options);
-            } else {
-                *bvh = build_bvh(*scene, options);
-            }
+            *bvh = embree_tree ? build_embree_tree(*scene, builder, options) : build_bvh(*scene, options);
         });
     }
     return {std::move(scene), std::move(bvh)};
@@ -219,16 +214,11 @@ py::object render(const PyTracer& self, uint32_t width, uint32_t height, const s
                   const std::string& quantity, double percentile, double scale_max, bool legend) {
     const Camera view = camera.empty() ? default_camera(*self.scene) : Camera::parse(camera);
     HeatmapOptions options;
-    if (quantity == "work") options.quantity = HeatmapQuantity::work;
-    else if (quantity == "nodes") options.quantity = HeatmapQuantity::nodes_visited;
-    else if (quantity == "triangles") options.quantity = HeatmapQuantity::triangles_tested;
-    else throw Error("quantity must be work, nodes or triangles, not '" + quantity + "'");
-    if (!(percentile > 0.0 && percentile <= 1.0)) throw Error("percentile must be in (0, 1], not " + std::to_string(percentile));
-    if (!(std::isfinite(scale_max) && scale_max >= 0.0))
-        throw Error("scale_max must be finite and >= 0 (0: from the percentile), not " + std::to_string(scale_max));
+    options.quantity = parse_heatmap_quantity(quantity);
     options.percentile = percentile;
     options.scale_max = scale_max;
     options.legend = legend;
+    validate(options);  // also for a shaded view: bad heat-map options are refused whatever is drawn
     Image image;
     HeatmapInfo info;
     {
@@ -389,7 +379,7 @@ PYBIND11_MODULE(spacebvh, m) {
     m.def("builtin_scenes", &builtin_scene_names);
     m.def("builders", [] {
         std::vector<std::string> names = builder_names();
-        names.insert(names.end(), {"embree-medium", "embree-high"});  // Embree 3's own binary trees
+        names.insert(names.end(), embree_tree_names().begin(), embree_tree_names().end());  // Embree 3's own binary trees
         return names;
     });
     m.def("kernels", &kernel_names);
@@ -492,8 +482,6 @@ PYBIND11_MODULE(spacebvh, m) {
                             std::to_string(epsilon));
             const std::vector<Ray> primary = make_rays(origins, directions, py::float_(0.0), py::float_(kInfinity));
             const std::vector<HitRecord> records = make_hit_records(t, primitive);
-            if (records.size() != primary.size())
-                throw Error(std::to_string(primary.size()) + " primary rays but " + std::to_string(records.size()) + " hits");
             std::vector<Hit> hits(records.size());
             for (size_t i = 0; i < records.size(); ++i) {
                 if (records[i].primitive == kInvalidIndex) continue;

@@ -272,17 +272,13 @@ size_t peak_rss_bytes() {
     return size_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
 }
 
-bool is_embree_tree(const std::string& builder) { return builder == "embree-medium" || builder == "embree-high"; }
-
 Bvh build_tree(const Scene& scene, const BuildOptions& options) {
     if (is_embree_tree(options.builder) && options.lookahead_depth > 0)
         throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
     const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
     Bvh bvh;
-    if (options.builder == "embree-medium") bvh = build_bvh_with_embree(scene, EmbreeQuality::medium, options);
-    else if (options.builder == "embree-high") bvh = build_bvh_with_embree(scene, EmbreeQuality::high, options);
+    if (is_embree_tree(options.builder)) bvh = build_embree_tree(scene, options.builder, options);
     else bvh = build_bvh(scene, options);  // our presets (optimised there); reports an unknown name
-    if (is_embree_tree(options.builder)) optimize_bvh(bvh, options);
     throw_if_interrupted();
     return bvh;
 }
@@ -290,7 +286,9 @@ Bvh build_tree(const Scene& scene, const BuildOptions& options) {
 std::string builder_list() {
     std::string names;
     for (const auto& name : builder_names()) names += name + ", ";
-    return names + "embree-medium, embree-high (Embree 3's own binary trees under our kernel)";
+    for (const auto& name : embree_tree_names()) names += name + ", ";
+    names.resize(names.size() - 2);
+    return names + " (Embree 3's own binary trees under our kernel)";
 }
 
 double milliseconds_since(std::chrono::steady_clock::time_point start) {

@@ -119,9 +119,6 @@ void throw_if_interrupted();  // throws Cancelled once Ctrl-C was pressed
 // The peak resident set of this process so far (getrusage ru_maxrss), in bytes.
 size_t peak_rss_bytes();
 
-// Our builders, plus Embree's own binary trees imported through rtcBuildBVH ("embree-medium",
-// "embree-high"), so Embree's tree quality can be measured under our kernel.
-bool is_embree_tree(const std::string& builder);
 Bvh build_tree(const Scene& scene, const BuildOptions& options);
 std::string builder_list();  // for --help
 

@@ -49,10 +49,7 @@ void add_render_command(CLI::App& app) {
         }
         HeatmapOptions heatmap;
         heatmap.scale_max = options->scale_max;
-        if (options->quantity == "work") heatmap.quantity = HeatmapQuantity::work;
-        else if (options->quantity == "nodes") heatmap.quantity = HeatmapQuantity::nodes_visited;
-        else if (options->quantity == "triangles") heatmap.quantity = HeatmapQuantity::triangles_tested;
-        else throw Error("--quantity must be work, nodes or triangles, got '" + options->quantity + "'");
+        heatmap.quantity = parse_heatmap_quantity(options->quantity);
         HeatmapInfo info;
         write_png(options->output, render_heatmap(scene, tracer, camera, width, height, &info, heatmap));
         const double pixels = double(width) * height;

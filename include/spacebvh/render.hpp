@@ -56,6 +56,11 @@ struct HeatmapOptions {
     bool legend = true;
 };
 
+// "work", "nodes" or "triangles" (the CLI's --quantity); throws Error for another name.
+HeatmapQuantity parse_heatmap_quantity(const std::string& name);
+// Throws Error unless percentile is in (0, 1] and scale_max finite and >= 0 (render_heatmap calls it).
+void validate(const HeatmapOptions& options);
+
 struct HeatmapInfo {
     double scale_max = 0;        // the value drawn with the top colour (values above are clamped)
     uint64_t max_value = 0;      // the largest per-pixel value

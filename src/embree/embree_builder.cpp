@@ -314,4 +314,21 @@ Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const Build
     return bvh;
 }
 
+const std::vector<std::string>& embree_tree_names() {
+    static const std::vector<std::string> names{"embree-medium", "embree-high"};
+    return names;
+}
+
+bool is_embree_tree(const std::string& builder) {
+    const auto& names = embree_tree_names();
+    return std::find(names.begin(), names.end(), builder) != names.end();
+}
+
+Bvh build_embree_tree(const Scene& scene, const std::string& builder, const BuildOptions& options) {
+    if (!is_embree_tree(builder)) throw Error("'" + builder + "' is not one of Embree's trees (embree-medium, embree-high)");
+    Bvh bvh = build_bvh_with_embree(scene, builder == "embree-high" ? EmbreeQuality::high : EmbreeQuality::medium, options);
+    optimize_bvh(bvh, options);
+    return bvh;
+}
+
 }  // namespace spacebvh

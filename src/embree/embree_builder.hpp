@@ -3,6 +3,9 @@
 // columns") for the setup this reproduces.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "embree/embree_scene.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/scene.hpp"
@@ -40,5 +43,14 @@ namespace spacebvh {
 // Thread-safe (each call has its own Embree BVH object). Throws Error for an empty scene, bad
 // options, or an Embree error.
 Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const BuildOptions& options);
+
+// Embree's trees as builder names beside our presets ("embree-medium", "embree-high"), so every front
+// end (CLI, Python) offers and builds them the same way.
+const std::vector<std::string>& embree_tree_names();
+bool is_embree_tree(const std::string& builder);
+
+// The Embree tree named `builder` (is_embree_tree): build_bvh_with_embree at that quality, then
+// optimize_bvh with `options` (a no-op without reinsertion iterations). Throws Error for another name.
+Bvh build_embree_tree(const Scene& scene, const std::string& builder, const BuildOptions& options);
 
 }  // namespace spacebvh

@@ -215,14 +215,24 @@ Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& came
     return image;
 }
 
+HeatmapQuantity parse_heatmap_quantity(const std::string& name) {
+    if (name == "work") return HeatmapQuantity::work;
+    if (name == "nodes") return HeatmapQuantity::nodes_visited;
+    if (name == "triangles") return HeatmapQuantity::triangles_tested;
+    throw Error("heat map quantity must be work, nodes or triangles, got '" + name + "'");
+}
+
+void validate(const HeatmapOptions& options) {
+    if (!(options.percentile > 0.0 && options.percentile <= 1.0))
+        throw Error("render_heatmap: percentile must be in (0, 1], got " + std::to_string(options.percentile));
+    if (!(options.scale_max >= 0.0) || std::isinf(options.scale_max))
+        throw Error("render_heatmap: scale_max must be finite and >= 0, got " + std::to_string(options.scale_max));
+}
+
 Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
                      uint32_t height, HeatmapInfo* info, const HeatmapOptions& options) {
     check_size(width, height, "render_heatmap");
-    if (!(options.percentile > 0.0 && options.percentile <= 1.0)) {
-        throw Error("render_heatmap: percentile must be in (0, 1], got " + std::to_string(options.percentile));
-    }
-    if (!(options.scale_max >= 0.0) || std::isinf(options.scale_max))
-        throw Error("render_heatmap: scale_max must be finite and >= 0, got " + std::to_string(options.scale_max));
+    validate(options);
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
     const size_t pixels = rays.size();
     std::vector<TraversalStats> per_pixel(pixels);
