@@ -2,9 +2,13 @@
 // (Popov et al. 2009), the overlap fraction for solid and flat nodes, validation and the description.
 #include <gtest/gtest.h>
 
+#include <immintrin.h>
+
 #include <cmath>
+#include <cstring>
 #include <limits>
 
+#include "build/simd_box.hpp"
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
 
@@ -228,4 +232,68 @@ TEST(CostModel, LeafBlocksRoundReferenceCountsUp) {
         blocks.leaf_block = good;
         EXPECT_NO_THROW(blocks.validate()) << good;
     }
+}
+
+// The object sweep prices cuts from SimdBox registers (src/build/simd_box.hpp): its extend, area and
+// overlap fraction must give the AABB forms' results bit for bit, or the sweep would build other
+// trees. Random boxes, partly on a coarse grid (so that touching, flat and equal coordinates, and -0
+// against +0, occur), partly with full mantissas (so that rounding order shows), some empty.
+TEST(CostModel, SimdBoxesPriceExactlyAsAabbs) {
+    uint64_t state = 12345;
+    auto next = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    };
+    auto coordinate = [&]() {
+        const float values[] = {-2.5f, -1.0f, -0.0f, 0.0f, 0.75f, 1.0f, 3.0f, 1e-30f, 7.25f};
+        switch (next() % 3) {
+            case 0: return values[next() % 9];
+            case 1: return float(int(next() % 2001) - 1000) / 64.0f;
+            default: return float(next()) * 0x1p-25f - 50.0f;  // full mantissas: rounding matters
+        }
+    };
+    auto random_box = [&]() {
+        AABB box;
+        if (next() % 10 == 0) return box;  // empty
+        const Vec3 a{coordinate(), coordinate(), coordinate()}, b{coordinate(), coordinate(), coordinate()};
+        box.extend(a);
+        box.extend(b);
+        return box;
+    };
+    auto same_bits = [](float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; };
+    // Bounds as a sweep reads them: a Reference-like record (bounds, then 4 more readable bytes).
+    struct Record {
+        AABB bounds;
+        uint32_t after = 0xffffffffu;  // a NaN pattern in the unused lane must not matter
+    };
+    int overlapping = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const AABB node = merge(random_box(), random_box());
+        AABB left, right;
+        build::SimdBox simd_left, simd_right;
+        for (int k = 0; k < 3; ++k) {
+            const Record a{random_box()}, b{random_box()};
+            left.extend(a.bounds);
+            simd_left.extend_as_aabb(a.bounds);
+            right.extend(b.bounds);
+            simd_right.extend_as_aabb(b.bounds);
+        }
+        const AABB back = simd_left.aabb();
+        for (int axis = 0; axis < 3; ++axis) {
+            ASSERT_TRUE(same_bits(back.lo[axis], left.lo[axis]) && same_bits(back.hi[axis], left.hi[axis])) << trial;
+        }
+        ASSERT_TRUE(same_bits(simd_left.area(), left.area())) << trial;
+        ASSERT_TRUE(same_bits(simd_right.area(), right.area())) << trial;
+        const __m128 node_extent = _mm_sub_ps(build::simd(node.hi), build::simd(node.lo));
+        const float expected = overlap_fraction(node, left, right);
+        ASSERT_TRUE(same_bits(build::overlap_fraction(node_extent, simd_left, simd_right), expected) ||
+                    (expected == 0.0f && build::overlap_fraction(node_extent, simd_left, simd_right) == 0.0f))
+            << trial;
+        overlapping += expected > 0.0f;
+        const CostModel cost = model(1.0f, 1.0f, 0.0f);
+        ASSERT_TRUE(same_bits(cost.split_cost_of_areas(node.area(), simd_left.area(), 3, simd_right.area(), 5),
+                              cost.split_cost(node, left, 3, right, 5)))
+            << trial;
+    }
+    EXPECT_GT(overlapping, 1000);  // the overlap branch was exercised
 }

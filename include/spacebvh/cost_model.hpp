@@ -40,6 +40,10 @@ struct CostModel {
     // splitting never pays by area and only the leaf size limit forces it.
     float split_cost(const AABB& node, const AABB& left, size_t left_count, const AABB& right,
                      size_t right_count) const;
+    // The same from the three surface areas, for a split without overlap penalty (or with its factor
+    // 1 + C_o * overlap already known): split_cost is this, to the bit.
+    float split_cost_of_areas(float node_area, float left_area, size_t left_count, float right_area, size_t right_count,
+                              float overlap_factor = 1.0f) const;
 };
 
 // Overlap fraction V(L ∩ R) / V(N) generalised to flat nodes: the product, over the axes on which N
@@ -50,13 +54,16 @@ struct CostModel {
 float overlap_fraction(const AABB& node, const AABB& left, const AABB& right);
 
 // Inline: the split finders evaluate it for every candidate.
+inline float CostModel::split_cost_of_areas(float node_area, float left_area, size_t left_count, float right_area,
+                                            size_t right_count, float overlap_factor) const {
+    // A point or a line of primitives (SA(N) = 0): no area to divide, each reference costs one test.
+    const float weighted_area = node_area > 0.0f ? (left_area * counted(left_count) + right_area * counted(right_count)) / node_area
+                                                 : counted(left_count) + counted(right_count);
+    return traversal_cost + overlap_factor * intersection_cost * weighted_area;
+}
+
 inline float CostModel::split_cost(const AABB& node, const AABB& left, size_t left_count, const AABB& right,
                                    size_t right_count) const {
-    const float node_area = node.area();
-    // A point or a line of primitives (SA(N) = 0): no area to divide, each reference costs one test.
-    const float weighted_area = node_area > 0.0f
-                                    ? (left.area() * counted(left_count) + right.area() * counted(right_count)) / node_area
-                                    : counted(left_count) + counted(right_count);
     float overlap_factor = 1.0f;
     if (overlap_penalty != 0.0f) {
         const float overlap = overlap_fraction(node, left, right);
@@ -65,7 +72,7 @@ inline float CostModel::split_cost(const AABB& node, const AABB& left, size_t le
             overlap_factor += overlap_penalty * overlap;
         }
     }
-    return traversal_cost + overlap_factor * intersection_cost * weighted_area;
+    return split_cost_of_areas(node.area(), left.area(), left_count, right.area(), right_count, overlap_factor);
 }
 
 }  // namespace spacebvh

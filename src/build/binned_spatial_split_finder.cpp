@@ -9,6 +9,7 @@
 #include <array>
 #include <vector>
 
+#include "build/simd_box.hpp"
 #include "build/spatial_split.hpp"
 
 namespace spacebvh::build {
@@ -27,23 +28,6 @@ struct SpatialBinning {
     float plane(uint32_t i) const { return i == bins ? origin + width * float(bins) : origin + width * float(i); }
 };
 
-// A box in SSE registers (the fourth lane unused): binning extends boxes by millions of points.
-struct alignas(16) SimdBox {
-    __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
-
-    void extend(const SimdBox& box) {
-        lo = _mm_min_ps(lo, box.lo);
-        hi = _mm_max_ps(hi, box.hi);
-    }
-    AABB aabb() const {
-        alignas(16) float l[4], h[4];
-        _mm_store_ps(l, lo);
-        _mm_store_ps(h, hi);
-        return AABB{{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
-    }
-};
-inline __m128 simd(Vec3 v) { return _mm_setr_ps(v.x, v.y, v.z, 0.0f); }
-inline SimdBox simd(const AABB& box) { return {simd(box.lo), simd(box.hi)}; }
 
 // Boxes and enter/exit counts per bin, for the three axes at once (one pass over the references).
 // Merging is exact (min/max, integer sums), so a parallel reduction gives the same bins whatever

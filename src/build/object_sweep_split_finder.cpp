@@ -1,10 +1,14 @@
 #include "build/object_sweep_split_finder.hpp"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <utility>
 #include <vector>
+
+#include "build/simd_box.hpp"
 
 namespace spacebvh::build {
 namespace {
@@ -72,32 +76,49 @@ void sort_by_centroid(std::span<Reference> references, int axis) {
     std::copy(sorted.begin(), sorted.end(), references.begin());
 }
 
-// Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates).
+// Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates). Boxes are
+// swept in SSE registers (SimdBox: the same bytes and areas as AABBs), and without an overlap
+// penalty a cut is priced from the areas alone: the suffix areas come from the right-to-left pass,
+// and boxes are made only for the cuts offered to the sink. crytek_sponza cbvh: see bench/RESULTS.md.
 template <typename Sink>
 void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     const std::span<Reference> references = context.references;
     const ReferenceSummary& node = context.summary;
     const size_t count = references.size();
     if (count < 2) return;
-    // Right-to-left suffix boxes; reused across axes.
-    std::vector<AABB> suffix_bounds(count);
+    const float node_area = node.bounds.area();
+    const bool penalised = cost.overlap_penalty != 0.0f;
+    const __m128 node_extent = _mm_sub_ps(simd(node.bounds.hi), simd(node.bounds.lo));
+    // Right-to-left suffix boxes and their areas; reused across axes.
+    std::vector<SimdBox> suffix_bounds(count);
+    std::vector<float> suffix_area(count);
     for (int axis = 0; axis < 3; ++axis) {
         if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
         // The order is total, so the sort gives one answer.
         sort_by_centroid(references, axis);
 
-        AABB right;
+        SimdBox right;
         for (size_t i = count; i-- > 1;) {
-            right.extend(references[i].bounds);
+            right.extend_as_aabb(references[i].bounds);
             suffix_bounds[i] = right;
+            suffix_area[i] = right.area();
         }
-        AABB left;
+        SimdBox left;
         for (size_t i = 1; i < count; ++i) {
-            left.extend(references[i - 1].bounds);
-            const float split_cost = cost.split_cost(node.bounds, left, i, suffix_bounds[i], count - i);
+            left.extend_as_aabb(references[i - 1].bounds);
+            // The overlap factor as CostModel::split_cost computes it.
+            float overlap_factor = 1.0f;
+            if (penalised) {
+                const float overlap = overlap_fraction(node_extent, left, suffix_bounds[i]);
+                if (overlap > 0.0f) {
+                    if (cost.overlap_penalty == kInfinity) continue;  // disjoint children only
+                    overlap_factor += cost.overlap_penalty * overlap;
+                }
+            }
+            const float split_cost = cost.split_cost_of_areas(node_area, left.area(), i, suffix_area[i], count - i, overlap_factor);
             if (split_cost < sink.threshold(axis)) {
-                Split split = make_split(SplitKind::object_sorted, split_cost, axis, left, uint32_t(i), suffix_bounds[i],
-                                         uint32_t(count - i));
+                Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),
+                                         suffix_bounds[i].aabb(), uint32_t(count - i));
                 split.tie = references[i];
                 sink.offer(split);
             }
