@@ -44,6 +44,9 @@ struct CostModel {
     // 1 + C_o * overlap already known): split_cost is this, to the bit.
     float split_cost_of_areas(float node_area, float left_area, size_t left_count, float right_area, size_t right_count,
                               float overlap_factor = 1.0f) const;
+    // 1 + C_o * overlap for an overlap fraction (overlap_fraction below); infinity when C_o = inf and
+    // the children overlap at all.
+    float overlap_factor(float overlap) const;
 };
 
 // Overlap fraction V(L ∩ R) / V(N) generalised to flat nodes: the product, over the axes on which N
@@ -62,17 +65,17 @@ inline float CostModel::split_cost_of_areas(float node_area, float left_area, si
     return traversal_cost + overlap_factor * intersection_cost * weighted_area;
 }
 
+inline float CostModel::overlap_factor(float overlap) const {
+    if (!(overlap > 0.0f)) return 1.0f;
+    if (overlap_penalty == kInfinity) return kInfinity;  // disjoint children only
+    return 1.0f + overlap_penalty * overlap;
+}
+
 inline float CostModel::split_cost(const AABB& node, const AABB& left, size_t left_count, const AABB& right,
                                    size_t right_count) const {
-    float overlap_factor = 1.0f;
-    if (overlap_penalty != 0.0f) {
-        const float overlap = overlap_fraction(node, left, right);
-        if (overlap > 0.0f) {
-            if (overlap_penalty == kInfinity) return kInfinity;  // disjoint children only
-            overlap_factor += overlap_penalty * overlap;
-        }
-    }
-    return split_cost_of_areas(node.area(), left.area(), left_count, right.area(), right_count, overlap_factor);
+    const float factor = overlap_penalty != 0.0f ? overlap_factor(overlap_fraction(node, left, right)) : 1.0f;
+    if (factor == kInfinity) return kInfinity;
+    return split_cost_of_areas(node.area(), left.area(), left_count, right.area(), right_count, factor);
 }
 
 }  // namespace spacebvh

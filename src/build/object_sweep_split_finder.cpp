@@ -106,15 +106,9 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
         SimdBox left;
         for (size_t i = 1; i < count; ++i) {
             left.extend_as_aabb(references[i - 1].bounds);
-            // The overlap factor as CostModel::split_cost computes it.
-            float overlap_factor = 1.0f;
-            if (penalised) {
-                const float overlap = overlap_fraction(node_extent, left, suffix_bounds[i]);
-                if (overlap > 0.0f) {
-                    if (cost.overlap_penalty == kInfinity) continue;  // disjoint children only
-                    overlap_factor += cost.overlap_penalty * overlap;
-                }
-            }
+            // As CostModel::split_cost prices the cut.
+            const float overlap_factor = penalised ? cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i])) : 1.0f;
+            if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
             const float split_cost = cost.split_cost_of_areas(node_area, left.area(), i, suffix_area[i], count - i, overlap_factor);
             if (split_cost < sink.threshold(axis)) {
                 Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),

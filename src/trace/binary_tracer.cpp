@@ -94,7 +94,7 @@ inline int intersect_children(const CompactNode& node, const SlabRay& slab, __m1
 }
 
 // A leaf's packs, out of line: inlined, the leaf test's many live values made the compiler spill and
-// shuffle registers on every node visit, leaf or not (about 30 of the 100 instructions of a visit).
+// shuffle registers on every node visit, leaf or not (about 30 of the 130 instructions of a visit).
 template <bool kAnyHit, bool kStats>
 [[gnu::noinline]] bool test_leaf(const trace::TrianglePack* packs, uint32_t first, uint32_t count, const Ray& ray,
                                  const trace::WatertightRay& shear, const trace::PackRay& pack_ray, float& tmax, Hit& hit,
