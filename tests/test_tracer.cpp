@@ -800,28 +800,83 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
     EXPECT_EQ(disagreements_with_arbiter(one, build_with(one, "binned"), rays), "");
 }
 
+// The binary layout turns a subtree whose triangles fit a pack into one leaf: a ray through the
+// root of a two-level tree of four single-triangle leaves then tests the root's box pair only, and
+// its four triangles together. A subtree of more triangles than the layout merges stays as built.
+TEST(Tracer, SmallSubtreesAreTestedAsOneLeaf) {
+    for (const uint32_t per_leaf : {1u, 5u}) {
+        Scene scene;
+        scene.name = "small";
+        for (uint32_t i = 0; i < 4 * per_leaf; ++i) {
+            const float x = float(i);
+            scene.triangles.push_back({{x, -1, -1}, {x, 1, -1}, {x, 0, 1}});
+        }
+        // Root: children [node 1, node 2]; node 1: leaves 0, 1; node 2: leaves 2, 3.
+        Bvh bvh;
+        bvh.builder = "hand-made";
+        bvh.nodes.resize(7);
+        auto triangles_box = [&](uint32_t first, uint32_t count) {
+            AABB box = AABB::empty();
+            for (uint32_t i = first; i < first + count; ++i) box.extend(scene.triangles[i].bounds());
+            return box;
+        };
+        bvh.nodes[0] = {triangles_box(0, 4 * per_leaf), 1, 0};
+        bvh.nodes[1] = {triangles_box(0, 2 * per_leaf), 3, 0};
+        bvh.nodes[2] = {triangles_box(2 * per_leaf, 2 * per_leaf), 5, 0};
+        for (uint32_t leaf = 0; leaf < 4; ++leaf) {
+            bvh.nodes[3 + leaf] = {triangles_box(leaf * per_leaf, per_leaf), leaf * per_leaf, per_leaf};
+        }
+        for (uint32_t i = 0; i < 4 * per_leaf; ++i) bvh.primitives.push_back(i);
+        const BinaryTracer tracer(scene, bvh);
+        Ray ray;
+        ray.org = {-1.0f, 0.0f, 0.0f};
+        ray.dir = {1.0f, 0.0f, 0.0f};
+        TraversalStats stats;
+        const Hit hit = tracer.intersect(ray, stats);
+        EXPECT_EQ(hit.primitive, 0u);
+        EXPECT_EQ(hit.t, 1.0f);
+        if (per_leaf == 1) {
+            EXPECT_EQ(stats.nodes_visited, 2u) << "the two pairs of leaves are merged into the root's children";
+            // Both merged leaves are entered: 2 lanes, then 4 (the second shares the first's pack and
+            // its lanes cover both; LeafPacker).
+            EXPECT_EQ(stats.triangles_tested, 6u);
+        } else {
+            // Root and left child (its two leaves, entered, are tested); the right child is pushed
+            // and skipped, entered beyond the hit.
+            EXPECT_EQ(stats.nodes_visited, 4u) << "10 triangles are more than a merged leaf holds";
+            EXPECT_EQ(stats.triangles_tested, 10u);
+        }
+        std::vector<Ray> rays = generate_random_rays(scene.bounds(), 500, 3);
+        EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
+    }
+}
+
 // A hand-made tree 1,000 levels deep (the builders' depth limit is 1,024) whose every level has two
-// inner children with the same box, so the traversal stack holds one entry per level.
+// inner children with the same box, so the traversal stack holds one entry per level. Leaves hold
+// kPerLeaf triangles, so that no pair of leaves is few enough for the binary layout to merge it
+// into one leaf (trace::WideCost::max_merged_leaf).
 TEST(Tracer, VeryDeepTreeWithAFullStackMatchesTheArbiter) {
     constexpr uint32_t kLevels = 1000;
+    constexpr uint32_t kPerLeaf = 5;
     Scene scene;
     scene.name = "deep";
     SplitMix64 rng(21);
-    for (uint32_t i = 0; i < 2 * kLevels + 1; ++i) {
+    for (uint32_t i = 0; i < (2 * kLevels + 1) * kPerLeaf; ++i) {
         const Vec3 c{8 * rng.uniform() - 4, 8 * rng.uniform() - 4, 8 * rng.uniform() - 4};
         scene.triangles.push_back({c, c + Vec3(0.4f, 0.1f, 0.0f), c + Vec3(0.0f, 0.3f, 0.4f)});
     }
     const AABB box = scene.bounds();
     Bvh bvh;
     bvh.builder = "hand-made";
-    // Chain node i: children [chain node i + 1, pair node i]; pair node i: leaves {2i}, {2i + 1};
+    // Chain node i: children [chain node i + 1, pair node i]; pair node i: leaves 2i and 2i + 1 (leaf k
+    // holds triangles k * kPerLeaf onwards);
     // the last chain node is the leaf {2 * kLevels}. Children are appended as pairs, left subtree first.
-    auto leaf = [&](uint32_t primitive) {
+    auto leaf = [&](uint32_t index) {
         BvhNode node;
         node.bounds = box;
         node.first = uint32_t(bvh.primitives.size());
-        node.reference_count = 1;
-        bvh.primitives.push_back(primitive);
+        node.reference_count = kPerLeaf;
+        for (uint32_t k = 0; k < kPerLeaf; ++k) bvh.primitives.push_back(index * kPerLeaf + k);
         return node;
     };
     bvh.nodes.resize(1);
@@ -848,7 +903,7 @@ TEST(Tracer, VeryDeepTreeWithAFullStackMatchesTheArbiter) {
         bvh.nodes[first] = leaf(2 * level);
         bvh.nodes[first + 1] = leaf(2 * level + 1);
     }
-    ASSERT_EQ(bvh.nodes.size(), 2 * scene.triangles.size() - 1);
+    ASSERT_EQ(bvh.nodes.size(), 2 * (2 * kLevels + 1) - 1);
     const BinaryTracer tracer(scene, bvh);
     std::vector<Ray> rays = generate_random_rays(box, 300, 7);
     EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
