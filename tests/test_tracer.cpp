@@ -802,7 +802,7 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
 
 // The binary layout turns a subtree whose triangles fit a pack into one leaf: a ray through the
 // root of a two-level tree of four single-triangle leaves then tests the root's box pair only, and
-// its four triangles together. A subtree of more triangles than the layout merges stays as built.
+// the two merged leaves' triangles. A subtree of more triangles than the layout merges stays as built.
 TEST(Tracer, SmallSubtreesAreTestedAsOneLeaf) {
     for (const uint32_t per_leaf : {1u, 5u}) {
         Scene scene;

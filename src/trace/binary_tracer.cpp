@@ -39,6 +39,8 @@ static_assert(sizeof(CompactNode) == 64);
 // coin toss the branch predictor often loses.
 constexpr size_t kUnit = 32;
 static_assert(sizeof(CompactNode) % kUnit == 0 && sizeof(trace::TrianglePack) % kUnit == 0);
+constexpr size_t kNodeUnits = sizeof(CompactNode) / kUnit;          // 2
+constexpr size_t kPackUnits = sizeof(trace::TrianglePack) / kUnit;  // 5
 
 struct BinaryTracer::Layout {
     std::vector<CompactNode, trace::HugePageAllocator<CompactNode>> buffer;  // nodes, then packs
@@ -309,15 +311,14 @@ LayoutParts lay_out(const Scene& scene, const Bvh& bvh) {
 BinaryTracer::BinaryTracer(const Scene& scene, const Bvh& bvh) : layout_(std::make_unique<Layout>()) {
     LayoutParts parts = lay_out(scene, bvh);
     // Join the parts: nodes first, packs after them, child indices turned into unit offsets.
-    const size_t node_units = parts.nodes.size() * (sizeof(CompactNode) / kUnit);
-    const size_t units = node_units + parts.packs.size() * (sizeof(trace::TrianglePack) / kUnit);
+    const size_t node_units = parts.nodes.size() * kNodeUnits;
+    const size_t units = node_units + parts.packs.size() * kPackUnits;
     if (units > std::numeric_limits<uint32_t>::max())
         throw std::length_error("binary layout: " + std::to_string(units * kUnit) +
                                 " bytes of nodes and triangles exceed the 32-bit offsets of its nodes (128 GiB)");
     for (CompactNode& node : parts.nodes) {
         for (int slot = 0; slot < 2; ++slot)
-            node.child[slot] = uint32_t(node.lanes(slot) ? node_units + size_t(node.child[slot]) * (sizeof(trace::TrianglePack) / kUnit)
-                                                         : size_t(node.child[slot]) * (sizeof(CompactNode) / kUnit));
+            node.child[slot] = uint32_t(node.lanes(slot) ? node_units + node.child[slot] * kPackUnits : node.child[slot] * kNodeUnits);
         order_children(node);
     }
     std::vector<CompactNode, trace::HugePageAllocator<CompactNode>>& buffer = layout_->buffer;
