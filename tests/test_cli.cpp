@@ -365,6 +365,32 @@ TEST_F(Cli, LookaheadInBuildAndCompare) {
     expect_clean_failure("compare builtin:soup --builders 'cbvh@lookahead=-1'", {"lookahead"});
 }
 
+// A compare row's own settings mean what the build flags of the same name mean: `bins=` is `--bins`
+// (the binned object search space), `spatialbins=` is `--spatial-bins`. Each row's tree has the
+// SAH that `build` gives with the flag, and differs from the default tree.
+TEST_F(Cli, CompareRowBinsAreTheBuildFlags) {
+    auto built_sah = [&](const std::string& flags) {
+        const CliResult r = run("build builtin:interior " + flags + " --no-epo --json b.json");
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        return read_json("b.json")["sah"].get<double>();
+    };
+    const double binned = built_sah("--builder binned"), binned4 = built_sah("--builder binned --bins 4");
+    const double kdbvh = built_sah("--builder kdbvh"), kdbvh4 = built_sah("--builder kdbvh --spatial-bins 4");
+    ASSERT_NE(binned, binned4);
+    ASSERT_NE(kdbvh, kdbvh4);
+    const CliResult r = run("compare builtin:interior --builders 'binned@bins=4,kdbvh@spatialbins=4,binned@spatialbins=4' "
+                            "--embree none --embree-packets none --random 1000 --width 16 --height 16 --runs 1 "
+                            "--build-runs 1 --no-epo --json c.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];
+    ASSERT_EQ(rows.size(), 3u);
+    EXPECT_DOUBLE_EQ(rows[0]["sah"].get<double>(), binned4) << rows[0];
+    EXPECT_DOUBLE_EQ(rows[1]["sah"].get<double>(), kdbvh4) << rows[1];
+    EXPECT_DOUBLE_EQ(rows[2]["sah"].get<double>(), binned) << rows[2];  // binned has no spatial search space
+    expect_clean_failure("compare builtin:soup --builders 'binned@bins=1'", {"bins"});
+    expect_clean_failure("compare builtin:soup --builders 'binned@objbins=8'", {"objbins", "spatialbins"});
+}
+
 // `--optimize`, `--optimize-iterations`, `NAME+opt` and `NAME@optimize=N`: the reinsertion optimiser
 // after the build; the tree's name and the compare rows say "+opt", the SAH is lower, answers stay right.
 TEST_F(Cli, OptimizeInBuildAndCompare) {

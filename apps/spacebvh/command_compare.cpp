@@ -107,9 +107,10 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3;ct=3;ci=1;leaf=8;block=4;budget=1.5;bins=64;gate=1e-5;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
-// a builder with some options of its own. "NAME+opt" is NAME with the reinsertion optimisation; the
-// label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
+// "NAME" or "NAME@co=0.3;ct=3;ci=1;leaf=8;block=4;budget=1.5;bins=64;spatialbins=64;gate=1e-5;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
+// a builder with some options of its own, each key named after its build flag (bins: --bins, the
+// binned object search space's; spatialbins: --spatial-bins). "NAME+opt" is NAME with the
+// reinsertion optimisation; the label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
 struct BuilderSpec {
     std::string label;
     BuildOptions options;
@@ -129,7 +130,8 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "leaf") spec.options.max_leaf_size = parse_unsigned(value, "leaf");
             else if (key == "block") spec.options.cost.leaf_block = parse_unsigned(value, "block");
             else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
-            else if (key == "bins") spec.options.spatial_bins = parse_unsigned(value, "bins");
+            else if (key == "bins") spec.options.object_bins = parse_unsigned(value, "bins");
+            else if (key == "spatialbins") spec.options.spatial_bins = parse_unsigned(value, "spatialbins");
             else if (key == "gate") spec.options.spatial_gate_alpha = parse_float_or_inf(value, "gate");
             else if (key == "search") spec.options.search_spaces = parse_search_spaces(value);
             else if (key == "grid") spec.options.grid_resolution = parse_float_or_inf(value, "grid");
@@ -140,7 +142,7 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
             else if (key == "optimize") spec.options.reinsertion_iterations = parse_unsigned(value, "optimize");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, ct, ci, leaf, block, budget, bins, gate, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
+                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
         }
         spec.options.validate();
     }
@@ -206,7 +208,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();
