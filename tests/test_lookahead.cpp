@@ -127,6 +127,97 @@ TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
     EXPECT_GT(checked, 20u);
 }
 
+// The object sweep sorts only the axes its references are not already sorted on (sweep_order), and
+// visits that axis first: its split must not depend on the order the references come in, with or
+// without an overlap penalty (equal costs on two axes go to the lower axis, whatever the visit order).
+TEST(ObjectSweep, SplitDoesNotDependOnTheReferencesOrder) {
+    std::mt19937 random(11);
+    size_t checked = 0;
+    for (float overlap_penalty : {0.0f, 1.0f}) {
+        CostModel cost;
+        cost.overlap_penalty = overlap_penalty;
+        for (TestNode& node : test_nodes()) {
+            const ReferenceSummary summary = build::summarize(node.references);
+            const build::ObjectSweepSplitFinder sweep;
+            const Split none;
+            std::vector<Reference> shuffled = node.references;
+            std::shuffle(shuffled.begin(), shuffled.end(), random);
+            const Split reference_split = sweep.find({shuffled, summary, shuffled.size(), summary.bounds.area(), none}, cost);
+            for (int axis = 0; axis < 3; ++axis) {
+                std::vector<Reference> sorted = node.references;
+                std::sort(sorted.begin(), sorted.end(), build::CentroidOrder{axis});
+                const Split split = sweep.find({sorted, summary, sorted.size(), summary.bounds.area(), none}, cost);
+                EXPECT_TRUE(same_split(split, reference_split)) << node.references.size() << " references, sorted on " << axis;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(checked, 50u);
+}
+
+// CheapestSplit: the lowest cost wins; of equal costs the lower axis, then the earlier offer.
+TEST(CheapestSplit, EqualCostsGoToTheLowerAxisWhateverTheOfferOrder) {
+    auto offer = [](build::CheapestSplit& sink, int axis, float cost, uint32_t tag) {
+        if (cost < sink.threshold(axis)) {
+            Split split = build::make_split(build::SplitKind::object_sorted, cost, axis, AABB{}, tag, AABB{}, 1);
+            sink.offer(split);
+        }
+    };
+    build::CheapestSplit later_axis_first;
+    offer(later_axis_first, 2, 5.0f, 1);
+    offer(later_axis_first, 0, 5.0f, 2);
+    offer(later_axis_first, 0, 5.0f, 3);  // same axis, same cost, later: loses
+    offer(later_axis_first, 1, 5.0f, 4);  // higher axis than the best: loses
+    EXPECT_EQ(later_axis_first.best.axis, 0);
+    EXPECT_EQ(later_axis_first.best.left_count, 2u);
+    build::CheapestSplit lower_axis_first;
+    offer(lower_axis_first, 0, 5.0f, 2);
+    offer(lower_axis_first, 2, 5.0f, 1);
+    EXPECT_EQ(lower_axis_first.best.axis, 0);
+    EXPECT_EQ(lower_axis_first.best.left_count, 2u);
+    offer(lower_axis_first, 2, 4.0f, 5);  // cheaper wins on any axis
+    EXPECT_EQ(lower_axis_first.best.axis, 2);
+    EXPECT_EQ(lower_axis_first.best.left_count, 5u);
+}
+
+// Applying a sweep split keeps the references' order: children of a node sorted on an axis are
+// sorted on it too (what lets them skip that sort), and they hold exactly the cut's references.
+TEST(ApplySplit, SweepSplitKeepsTheOrder) {
+    const CostModel cost;
+    size_t checked = 0;
+    for (TestNode& node : test_nodes()) {
+        const ReferenceSummary summary = build::summarize(node.references);
+        const build::ObjectSweepSplitFinder sweep;
+        const Split none;
+        for (int axis = 0; axis < 3; ++axis) {
+            std::vector<Reference> storage = node.references;
+            const Split split = sweep.find({storage, summary, storage.size(), summary.bounds.area(), none}, cost);
+            if (!split.is_valid()) continue;
+            std::sort(storage.begin(), storage.end(), build::CentroidOrder{axis});
+            const std::vector<Reference> before = storage;
+            const build::ChildRanges children = build::apply_split(storage, uint32_t(storage.size()), split, node.scene->triangles);
+            ASSERT_EQ(children.left_count, split.left_count);
+            ASSERT_EQ(children.left_count + children.right_count, before.size());
+            std::vector<Reference> expected_left, expected_right;
+            for (const Reference& reference : before)
+                (build::CentroidOrder{split.axis}(reference, split.tie) ? expected_left : expected_right).push_back(reference);
+            const std::span<const Reference> left(storage.data(), children.left_count);
+            const std::span<const Reference> right(storage.data() + children.left_capacity, children.right_count);
+            auto same = [](std::span<const Reference> a, const std::vector<Reference>& b) {
+                return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const Reference& x, const Reference& y) {
+                           return x.primitive == y.primitive && x.bounds == y.bounds;
+                       });
+            };
+            EXPECT_TRUE(same(left, expected_left)) << "axis " << axis;
+            EXPECT_TRUE(same(right, expected_right)) << "axis " << axis;
+            EXPECT_TRUE(std::is_sorted(left.begin(), left.end(), build::CentroidOrder{axis}));
+            EXPECT_TRUE(std::is_sorted(right.begin(), right.end(), build::CentroidOrder{axis}));
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 20u);
+}
+
 // The candidates of all search spaces start with the greedy split (what the driver takes without a
 // lookahead), also when the spatial gate reads the cheapest split of the spaces before it.
 TEST(SplitSearch, CandidatesStartWithTheCheapestSplit) {

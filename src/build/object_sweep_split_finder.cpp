@@ -76,6 +76,30 @@ void sort_by_centroid(std::span<Reference> references, int axis) {
     std::copy(sorted.begin(), sorted.end(), references.begin());
 }
 
+// The axes a node can be cut on (its centroids not all equal there), in the order to sweep them:
+// first one on which its references are already sorted, then the others. A child of a sweep split
+// inherits its parent's order (apply_split keeps it), that of the last axis the parent swept, so
+// one of its three sorts is skipped (the check is linear and stops at the first reference out of
+// order). The sweep's answer does not depend on this order: CheapestSplit and SplitCandidates
+// break ties by axis, not by the order of offers across axes.
+struct SweepOrder {
+    std::array<int, 3> axes{};
+    int count = 0;
+    bool first_sorted = false;  // axes[0] needs no sort
+};
+SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSummary& node) {
+    SweepOrder order;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
+        order.axes[order.count++] = axis;
+        if (!order.first_sorted && std::is_sorted(references.begin(), references.end(), CentroidOrder{axis})) {
+            order.first_sorted = true;
+            std::rotate(order.axes.begin(), order.axes.begin() + order.count - 1, order.axes.begin() + order.count);
+        }
+    }
+    return order;
+}
+
 // Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates). Boxes are
 // swept in SSE registers (SimdBox: the same bytes and areas as AABBs), and without an overlap
 // penalty a cut is priced from the areas alone: the suffix areas come from the right-to-left pass,
@@ -92,10 +116,11 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     // Right-to-left suffix boxes and their areas; reused across axes.
     std::vector<SimdBox> suffix_bounds(count);
     std::vector<float> suffix_area(count);
-    for (int axis = 0; axis < 3; ++axis) {
-        if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
+    const SweepOrder order = sweep_order(references, node);
+    for (int k = 0; k < order.count; ++k) {
+        const int axis = order.axes[k];
         // The order is total, so the sort gives one answer.
-        sort_by_centroid(references, axis);
+        if (k > 0 || !order.first_sorted) sort_by_centroid(references, axis);
 
         SimdBox right;
         for (size_t i = count; i-- > 1;) {

@@ -148,6 +148,20 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
         const uint32_t bin = split.bin;
         middle = std::partition(storage.begin(), storage.begin() + count,
                                 [&](const Reference& reference) { return left_of_bin(reference, binning, axis, bin); });
+    } else if (split.kind == SplitKind::object_sorted) {
+        // In order: the sweep left the references sorted on the last axis it swept, and children that
+        // keep that order skip one of their three sorts (object_sweep_split_finder.cpp, sweep_order).
+        const CentroidOrder before{split.axis};
+        const Reference tie = split.tie;
+        std::vector<Reference> right;
+        right.reserve(split.right_count);
+        auto left_end = storage.begin();
+        for (auto reference = storage.begin(); reference != storage.begin() + count; ++reference) {
+            if (before(*reference, tie)) *left_end++ = *reference;
+            else right.push_back(*reference);
+        }
+        std::copy(right.begin(), right.end(), left_end);
+        middle = left_end;
     } else {
         middle = std::partition(storage.begin(), storage.begin() + count,
                                 [&](const Reference& reference) { return goes_left(reference, split); });

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -89,10 +90,12 @@ struct NodeContext {
 // Where a finder's evaluation loop puts the configurations it evaluates. A finder offers a split
 // only when its cost is below threshold(axis), so the common case builds no Split at all.
 //
-// CheapestSplit keeps the one cheapest configuration (earlier offers win ties): find().
+// CheapestSplit keeps the one cheapest configuration: find(). Of equal costs the lower axis wins,
+// and on one axis the earlier offer, whatever order a finder visits the axes in (the object sweep
+// starts with the axis its references are already sorted on).
 struct CheapestSplit {
     Split best;
-    float threshold(int /*axis*/) const { return best.cost; }
+    float threshold(int axis) const { return axis < best.axis ? std::nextafter(best.cost, kInfinity) : best.cost; }
     void offer(const Split& split) { best = split; }
 };
 
