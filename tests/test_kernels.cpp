@@ -7,6 +7,7 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -23,6 +24,7 @@
 #include "spacebvh/verify.hpp"
 #include "spacebvh/wide_tracer.hpp"
 #include "test_support.hpp"
+#include "trace/traversal_common.hpp"
 #include "trace/triangle_pack.hpp"
 #include "trace/visit_order.hpp"
 
@@ -408,4 +410,42 @@ TEST(Kernels, VisitKeysSortInTheClosestHitVisitOrder) {
     std::mt19937 random(7);
     check_visit_key_order<4>(random);
     check_visit_key_order<8>(random);
+}
+
+// The fused slab constants, made for three axes at once in vector instructions, are bit for bit the
+// formula of traversal_common.hpp computed one axis at a time: rays of every magnitude, axis-parallel
+// ones (+0 and -0), and directions so small that 1/d overflows.
+TEST(FusedSlabs, AreTheScalarFormulaBitForBit) {
+    std::mt19937 random(5);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f), exponent(-30.0f, 30.0f);
+    auto value = [&] { return unit(random) * std::exp2(exponent(random)); };
+    std::vector<Ray> rays;
+    for (int i = 0; i < 2000; ++i) rays.push_back({{value(), value(), value()}, {value(), value(), value()}});
+    for (float special : {0.0f, -0.0f, 1e-40f, -1e-40f, 3e38f})
+        for (int axis = 0; axis < 3; ++axis) {
+            Ray ray{{value(), 1e30f, -2.5f}, {value(), value(), value()}};
+            ray.dir[axis] = special;
+            rays.push_back(ray);
+        }
+    auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
+    for (const Ray& ray : rays) {
+        const trace::FusedSlabs slabs(ray);
+        for (int axis = 0; axis < 3; ++axis) {
+            const float org = ray.org[axis], inv = 1.0f / ray.dir[axis];
+            const float exit_inv = inv * (1.0f + 0x1p-21f);
+            const float scaled_org = org * inv, exit_scaled_org = org * exit_inv;
+            float entry_scale = 0.0f, exit_scale = 0.0f, entry_offset = kInfinity, exit_offset = -kInfinity;
+            if (std::isfinite(exit_inv) && std::isfinite(exit_scaled_org)) {
+                entry_scale = inv;
+                entry_offset = scaled_org + (std::fabs(scaled_org) * 0x1p-21f + 0x1p-140f);
+                exit_scale = exit_inv;
+                exit_offset = exit_scaled_org - (std::fabs(exit_scaled_org) * 0x1p-21f + 0x1p-140f);
+            }
+            EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.entry_scale, axis)), bits(entry_scale)) << axis;
+            EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.entry_offset, axis)), bits(entry_offset)) << axis;
+            EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.exit_scale, axis)), bits(exit_scale)) << axis;
+            EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.exit_offset, axis)), bits(exit_offset)) << axis;
+            EXPECT_EQ(((slabs.negative >> axis) & 1u) != 0, std::signbit(inv)) << axis;
+        }
+    }
 }

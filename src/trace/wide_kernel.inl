@@ -9,7 +9,7 @@
 // No lambdas here: they would not inherit the target of the pragma region.
 
 // Per-ray constants of the single-ray box test: the fused slab constants of each axis
-// (traversal_common.hpp, FusedSlab: why the test stays conservative) broadcast, and which plane of a
+// (traversal_common.hpp, FusedSlabs: why the test stays conservative) broadcast, and which plane of a
 // node's SoA boxes the ray enters through (the lower one for a positive direction) and which it
 // leaves through.
 template <class S>
@@ -18,14 +18,15 @@ struct RayBoxes {
     int entry_plane[3], exit_plane[3];
 
     explicit RayBoxes(const Ray& ray) {
+        const FusedSlabs slabs(ray);
         for (int axis = 0; axis < 3; ++axis) {
-            const FusedSlab slab(ray.org[axis], ray.dir[axis]);
-            entry_scale[axis] = S::set1(slab.entry_scale);
-            entry_offset[axis] = S::set1(slab.entry_offset);
-            exit_scale[axis] = S::set1(slab.exit_scale);
-            exit_offset[axis] = S::set1(slab.exit_offset);
-            entry_plane[axis] = 2 * axis + (slab.negative ? 1 : 0);
-            exit_plane[axis] = 2 * axis + (slab.negative ? 0 : 1);
+            entry_scale[axis] = S::set1(FusedSlabs::lane(slabs.entry_scale, axis));
+            entry_offset[axis] = S::set1(FusedSlabs::lane(slabs.entry_offset, axis));
+            exit_scale[axis] = S::set1(FusedSlabs::lane(slabs.exit_scale, axis));
+            exit_offset[axis] = S::set1(FusedSlabs::lane(slabs.exit_offset, axis));
+            const bool negative = (slabs.negative >> axis) & 1u;
+            entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
+            exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
         }
     }
 };
@@ -49,10 +50,10 @@ template <class S>
 }
 
 // The packet kernel's test of one ray against all child boxes (`Boxes`: its origin and inverse
-// direction broadcast): the slab test of the binary kernel, lane-parallel, with the same operand order
-// (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound unchanged: boxes are
-// closed) and the same conservative widening of the exit distance (kFarScale), so it agrees lane for
-// lane with rays_entering_child. Returns the number of children entered within [tmin, tmax], their
+// direction broadcast): the subtract-multiply slab test, lane-parallel, with the operand order of
+// rays_entering_child (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound
+// unchanged: boxes are closed) and its conservative widening of the exit distance (kFarScale), so
+// the two agree lane for lane. Returns the number of children entered within [tmin, tmax], their
 // entry distances and slots in slot order.
 template <class S, class Boxes>
 [[gnu::always_inline]] inline int enter_children(const WideNode<S::kLanes>& node, const Boxes& ray, float tmin, float tmax,
