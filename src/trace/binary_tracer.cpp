@@ -85,7 +85,7 @@ void order_children(CompactNode& node) {
 }
 
 // Per-ray constants of the two-box slab test. With FMA (native builds), per axis the fused slab
-// constants (FusedSlab, traversal_common.hpp) of the entry planes in lanes 0,1 and of the exit planes
+// constants (FusedSlabs, traversal_common.hpp) of the entry planes in lanes 0,1 and of the exit planes
 // in lanes 2,3; without (portable builds, where a fused operation would be a slow library call), the
 // origin and inverse direction, and the exit distance widened by kFarScale instead.
 struct SlabRay {
@@ -155,9 +155,9 @@ struct SlabRay {
 
 // Returns a 2-bit mask of the children whose boxes the ray enters within [tmin, tmax]; their entry
 // distances go to `entry`. With FMA each slab distance is one fused multiply-subtract whose constants
-// keep the test conservative (FusedSlab), in place of (plane - o) * (1/d) and a widened exit: one
-// rounding step less between a node's load and the choice of the next node (Sponza random rays
-// 1.06-1.09x, bunny 1.12x; the same boxes entered, the same answers). A NaN or infinite distance (an
+// keep the test conservative (FusedSlabs), in place of (plane - o) * (1/d) and a widened exit: one
+// rounding step less between a node's load and the choice of the next node (random rays: Sponza
+// 1.09x, bunny 1.13x; the same boxes entered, the same answers). A NaN or infinite distance (an
 // axis the ray does not move along; 0 * inf where it lies in a slab plane) leaves the running bound
 // unchanged, by the min/max operand order: boxes are closed.
 inline int intersect_children(const CompactNode& node, const SlabRay& slab, __m128 tmin, __m128 tmax, float entry[2]) {
