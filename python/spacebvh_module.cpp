@@ -100,8 +100,8 @@ struct PyTracer {
 
 PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optional<float> overlap_penalty,
             float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
-            float reference_budget, const std::string& search, uint32_t spatial_bins, std::optional<float> spatial_gate,
-            uint32_t optimize, int threads) {
+            float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
+            std::optional<float> spatial_gate, uint32_t optimize, int threads) {
     // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
     // optimiser apply to them, our search options do not.
     const bool embree_tree = is_embree_tree(builder);
@@ -109,6 +109,7 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
         throw Error("search and spatial_gate apply to our builders, not to Embree's tree '" + builder + "'");
     BuildOptions options = options_for(embree_tree ? "binned" : builder);
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
+    options.object_bins = object_bins;
     options.spatial_bins = spatial_bins;
     if (spatial_gate) options.spatial_gate_alpha = *spatial_gate;
     if (overlap_penalty) options.cost.overlap_penalty = *overlap_penalty;
@@ -396,11 +397,13 @@ PYBIND11_MODULE(spacebvh, m) {
     m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
           py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,
           py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u, py::arg("reference_budget") = 1.3f,
-          py::arg("search") = "", py::arg("spatial_bins") = 32u, py::arg("spatial_gate") = py::none(),
+          py::arg("search") = "", py::arg("object_bins") = 32u, py::arg("spatial_bins") = 32u,
+          py::arg("spatial_gate") = py::none(),
           py::arg("optimize") = 0u, py::arg("threads") = 0,
           "Builds a BVH with a named builder (builders()); overlap_penalty defaults to the builder's own C_o "
           "(float('inf'): disjoint children only); search = the CLI's --search ('binned,spatial': the fast spatial "
-          "variant; '' = the builder's own); spatial_gate = --spatial-gate (None = the builder's own alpha); "
+          "variant; '' = the builder's own); object_bins, spatial_bins = --bins, --spatial-bins; spatial_gate = "
+          "--spatial-gate (None = the builder's own alpha); "
           "optimize = reinsertion iterations (0 = off, 16 = the CLI's --optimize). Deterministic whatever `threads`.");
 
     py::class_<PyTracer>(m, "Tracer", "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.")

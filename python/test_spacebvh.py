@@ -208,6 +208,13 @@ class TracingTests(unittest.TestCase):
         ungated = spacebvh.build(self.scene, "spatial", spatial_gate=0.0)
         self.assertLess(gated.reference_count, ungated.reference_count)
         self.assertNotEqual(spacebvh.build(self.scene, "spatial", spatial_gate=0.0, spatial_bins=4).stats(), ungated.stats())
+        # object_bins is --bins: the binned builder's bins (the CLI's tree, to the last digit).
+        coarse = spacebvh.build(self.scene, "binned", object_bins=4)
+        self.assertNotEqual(coarse.sah, spacebvh.build(self.scene, "binned").sah)
+        self.assertEqual(coarse.stats(), spacebvh.build(self.scene, "binned", object_bins=4, threads=1).stats())
+        self.check_against_brute_force(spacebvh.Tracer(coarse, "binary"))
+        with self.assertRaisesRegex(spacebvh.Error, "bins"):
+            spacebvh.build(self.scene, "binned", object_bins=1)
         with self.assertRaisesRegex(spacebvh.Error, "sideways"):
             spacebvh.build(self.scene, "spatial", search="sideways")
         with self.assertRaisesRegex(spacebvh.Error, "gate"):
