@@ -107,11 +107,12 @@ struct SlabRay {
     }
     template <int kAxis>
     [[gnu::always_inline]] void set_axis(const Ray& ray, const trace::FusedSlabs& slabs) {
-        constexpr int kLanes = _MM_SHUFFLE(kAxis, kAxis, kAxis, kAxis);
 #ifdef __FMA__
         (void)ray;
-        scale[kAxis] = _mm_shuffle_ps(slabs.entry_scale, slabs.exit_scale, kLanes);
-        offset[kAxis] = _mm_shuffle_ps(slabs.entry_offset, slabs.exit_offset, kLanes);
+        // Lanes 0,1 from the entry constants' lane kAxis, lanes 2,3 from the exit constants'.
+        constexpr int kAxisLanes = _MM_SHUFFLE(kAxis, kAxis, kAxis, kAxis);
+        scale[kAxis] = _mm_shuffle_ps(slabs.entry_scale, slabs.exit_scale, kAxisLanes);
+        offset[kAxis] = _mm_shuffle_ps(slabs.entry_offset, slabs.exit_offset, kAxisLanes);
 #else
         org[kAxis] = _mm_set1_ps(ray.org[kAxis]);
         inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);  // +-inf for axis-parallel rays
