@@ -18,31 +18,41 @@ struct KeyedReference {
     uint32_t index;
 };
 
-// Least-significant-digit radix sort on the 64-bit keys, 8 bits per pass, stable. One counting pass
-// makes all eight histograms; a digit that is the same for every key (the primitive's high bits in
-// a node, often) is skipped.
-void radix_sort(std::vector<KeyedReference>& items) {
+// Least-significant-digit radix sort on the low `key_bits` bits of the keys, 11 bits per pass (2048
+// buckets, which stay in the L1/L2 cache), stable. One counting pass makes all histograms; a digit
+// that is the same for every key (the high bits of the centroids in a small node, often) is skipped.
+void radix_sort(std::vector<KeyedReference>& items, int key_bits) {
+    constexpr int kDigitBits = 11;
+    constexpr uint32_t kBuckets = 1u << kDigitBits, kMask = kBuckets - 1;
+    const int digits = (key_bits + kDigitBits - 1) / kDigitBits;
     const size_t count = items.size();
-    std::vector<std::array<uint32_t, 256>> histograms(8, std::array<uint32_t, 256>{});
+    std::vector<std::array<uint32_t, kBuckets>> histograms(digits, std::array<uint32_t, kBuckets>{});
     for (const KeyedReference& item : items)
-        for (int digit = 0; digit < 8; ++digit) ++histograms[digit][(item.key >> (8 * digit)) & 0xff];
+        for (int digit = 0; digit < digits; ++digit) ++histograms[digit][(item.key >> (kDigitBits * digit)) & kMask];
     std::vector<KeyedReference> scratch(count);
-    for (int digit = 0; digit < 8; ++digit) {
-        std::array<uint32_t, 256>& histogram = histograms[digit];
-        if (histogram[(items[0].key >> (8 * digit)) & 0xff] == count) continue;
+    for (int digit = 0; digit < digits; ++digit) {
+        std::array<uint32_t, kBuckets>& histogram = histograms[digit];
+        const int shift = kDigitBits * digit;
+        if (histogram[(items[0].key >> shift) & kMask] == count) continue;
         uint32_t offset = 0;
         for (uint32_t& bucket : histogram) offset += std::exchange(bucket, offset);
-        for (const KeyedReference& item : items) scratch[histogram[(item.key >> (8 * digit)) & 0xff]++] = item;
+        for (const KeyedReference& item : items) scratch[histogram[(item.key >> shift) & kMask]++] = item;
         items.swap(scratch);
     }
 }
 
 // Sorts the references by CentroidOrder{axis}, but on precomputed integer keys instead of computing
 // two centroids per comparison and moving 28-byte references: (centroid as an order-preserving
-// integer, primitive) packed into 64 bits, radix-sorted, then one gather. Only references equal on
-// both (pieces of one triangle with the same centroid) are compared by CentroidOrder itself, so the
-// order is the same total order. crytek_sponza, 2 threads: the sorts took 40 % of a `spatial`
-// build; with this it went from 999 to 605 ms, and `cbvh` from 706 to 339 ms (same tree).
+// integer, primitive) packed into 32 + B bits, B the bit width of the node's largest primitive id,
+// radix-sorted, then one gather. The primitive must be in the key: most references share their
+// centroid with another (the two triangles of a quad, coplanar triangles on an axis-aligned plane;
+// 82 % of those sorted in a crytek_sponza build). Only references equal on both (pieces of one
+// triangle with the same centroid) are compared by CentroidOrder itself, so the order is the same
+// total order. crytek_sponza, 2 threads: the sorts took 40 % of a `spatial` build; with this it went
+// from 999 to 605 ms, and `cbvh` from 706 to 339 ms (same tree). Packing the key into 32 + B bits and
+// sorting it 11 bits per pass (five passes at most for 786k triangles, where 8-bit digits of a 64-bit
+// key took up to seven), from 256 references up instead of 1024: cbvh 259 -> 243 ms, spatial 511 ->
+// 485 ms (same trees; bench/RESULTS.md, session 14).
 void sort_by_centroid(std::span<Reference> references, int axis) {
     const size_t count = references.size();
     const CentroidOrder order{axis};
@@ -50,15 +60,18 @@ void sort_by_centroid(std::span<Reference> references, int axis) {
         std::sort(references.begin(), references.end(), order);
         return;
     }
+    uint32_t largest_primitive = 0;
+    for (const Reference& reference : references) largest_primitive = std::max(largest_primitive, reference.primitive);
+    const int primitive_bits = std::bit_width(largest_primitive);
     std::vector<KeyedReference> keyed(count);
     for (size_t i = 0; i < count; ++i) {
         // + 0.0f turns -0 into +0 (they compare equal as floats); input coordinates are finite.
         const uint32_t bits = std::bit_cast<uint32_t>(references[i].centroid(axis) + 0.0f);
         const uint32_t ordered = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
-        keyed[i] = {(uint64_t(ordered) << 32) | references[i].primitive, uint32_t(i)};
+        keyed[i] = {(uint64_t(ordered) << primitive_bits) | references[i].primitive, uint32_t(i)};
     }
-    if (count > 1024) {
-        radix_sort(keyed);
+    if (count > 256) {  // below, std::sort beats clearing the histograms
+        radix_sort(keyed, 32 + primitive_bits);
     } else {
         std::sort(keyed.begin(), keyed.end(), [](const KeyedReference& a, const KeyedReference& b) { return a.key < b.key; });
     }
