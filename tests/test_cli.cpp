@@ -127,6 +127,16 @@ protected:
 
     nlohmann::json read_json(const std::string& name) const { return nlohmann::json::parse(read(name)); }
 
+    // Runs `spacebvh compare ARGS --json c.json` and reads its first scene's rows into `rows`. Fails
+    // fatally unless the command succeeds with `expected_rows` rows: call it under
+    // ASSERT_NO_FATAL_FAILURE (a fatal failure in a helper only ends the helper).
+    void compare_rows(const std::string& args, size_t expected_rows, nlohmann::json& rows) const {
+        const CliResult r = run("compare " + args + " --json c.json");
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        rows = read_json("c.json")["scenes"][0]["rows"];
+        ASSERT_EQ(rows.size(), expected_rows) << rows.dump();
+    }
+
     // A failing command: exit code 1 or 2 (not 0, not a crash), and the output names the problem.
     void expect_clean_failure(const std::string& args, const std::vector<std::string>& mentions) const {
         SCOPED_TRACE("spacebvh " + args);
@@ -352,11 +362,10 @@ TEST_F(Cli, LookaheadInBuildAndCompare) {
     ASSERT_EQ(build.exit_code, 0) << build.output;
     EXPECT_EQ(read_json("l.json")["lookahead_depth"], 1);
     EXPECT_NE(build.output.find("lookahead 1"), std::string::npos) << build.output;
-    const CliResult r = run("compare builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium --embree-packets none "
-                            "--random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo --json c.json");
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];
-    ASSERT_EQ(rows.size(), 3u);
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium "
+                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                                         3, rows));
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("cbvh@lookahead=1;candidates=1", 0), 0u) << rows[1];
     for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
     expect_clean_failure("build builtin:soup --lookahead 99 --no-epo", {"lookahead"});
@@ -378,12 +387,11 @@ TEST_F(Cli, CompareRowBinsAreTheBuildFlags) {
     const double kdbvh = built_sah("--builder kdbvh"), kdbvh4 = built_sah("--builder kdbvh --spatial-bins 4");
     ASSERT_NE(binned, binned4);
     ASSERT_NE(kdbvh, kdbvh4);
-    const CliResult r = run("compare builtin:interior --builders 'binned@bins=4,kdbvh@spatialbins=4,binned@spatialbins=4' "
-                            "--embree none --embree-packets none --random 1000 --width 16 --height 16 --runs 1 "
-                            "--build-runs 1 --no-epo --json c.json");
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];
-    ASSERT_EQ(rows.size(), 3u);
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:interior --builders 'binned@bins=4,kdbvh@spatialbins=4,binned@spatialbins=4' "
+                                         "--embree none --embree-packets none --random 1000 --width 16 --height 16 --runs 1 "
+                                         "--build-runs 1 --no-epo",
+                                         3, rows));
     EXPECT_DOUBLE_EQ(rows[0]["sah"].get<double>(), binned4) << rows[0];
     EXPECT_DOUBLE_EQ(rows[1]["sah"].get<double>(), kdbvh4) << rows[1];
     EXPECT_DOUBLE_EQ(rows[2]["sah"].get<double>(), binned) << rows[2];  // binned has no spatial search space
@@ -407,12 +415,10 @@ TEST_F(Cli, OptimizeInBuildAndCompare) {
     EXPECT_EQ(read_json("three.json")["reinsertion_iterations"], 3);
     EXPECT_EQ(read_json("three.json")["builder"], "binned+opt");
 
-    const CliResult r = run("compare builtin:soup --builders 'binned,binned+opt,cbvh@optimize=2' --embree medium "
-                            "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo "
-                            "--json c.json");
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json rows = read_json("c.json")["scenes"][0]["rows"];
-    ASSERT_EQ(rows.size(), 4u);
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'binned,binned+opt,cbvh@optimize=2' --embree medium "
+                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                                         4, rows));
     EXPECT_EQ(rows[0]["builder"].get<std::string>().rfind("binned (", 0), 0u) << rows[0];
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("binned+opt (", 0), 0u) << rows[1];
     EXPECT_EQ(rows[2]["builder"].get<std::string>().rfind("cbvh+opt@optimize=2 (", 0), 0u) << rows[2];
