@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""The C_o table of bench/RESULTS.md, "Issue #3, session 14".
+"""The C_o tables of bench/RESULTS.md, "Issue #3, session 14".
 
-Reads `spacebvh compare --json` files (one per run and scene, default: co_SCENE_*.json beside this
-script) and prints, per scene and row, the SAH, the references and the median over runs of the row's
-Mrays/s divided by the first row's in the same run (random, primary, diffuse; closest hit, then
-occlusion).
+Reads `spacebvh compare --json` files, one per run and scene, found by a pattern with `{scene}` in it
+(default: co_SCENE_N.json beside this script; bench/co_sweep.sh writes co_sweep_SCENE_N.json), and
+prints per scene and row the SAH, EPO, references and the median over runs of the row's Mrays/s
+divided by the first row's in the same run (random, primary, diffuse; closest hit, then occlusion).
 """
 import glob
 import json
@@ -12,7 +12,7 @@ import os
 import statistics
 import sys
 
-SCENES = ["living_room_3", "coffee_maker", "crytek_sponza", "bunny", "sibenik"]
+SCENES = ["living_room_3", "coffee_maker", "crytek_sponza", "crytek_sponza_rotated", "bunny", "sibenik"]
 KINDS = ["random", "primary", "diffuse"]
 FIELDS = ["closest_mrays", "occlusion_mrays"]
 
@@ -23,7 +23,7 @@ def tree_rows(run):
 
 
 def main():
-    pattern = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "co_{scene}_*.json")
+    pattern = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "co_{scene}_[0-9]*.json")
     for scene in SCENES:
         files = sorted(glob.glob(pattern.format(scene=scene)))
         if not files:
@@ -39,7 +39,8 @@ def main():
                     per_run = [rows[name][kind][field] / rows[baseline][kind][field] for rows in runs]
                     ratios.append(f"{statistics.median(per_run):.3f}")
             first = runs[0][name]
-            print(f"  {name:<26} SAH {first['sah']:6.2f} refs {first['references']:7d}  "
+            epo = f"{first['epo']:6.2f}" if first.get("epo") is not None else "     -"
+            print(f"  {name:<26} SAH {first['sah']:6.2f} EPO {epo} refs {first['references']:7d}  "
                   f"random {ratios[0]} {ratios[1]}  primary {ratios[2]} {ratios[3]}  diffuse {ratios[4]} {ratios[5]}")
 
 
