@@ -82,7 +82,9 @@ TEST_P(SplittingBuilder, BudgetIsHonouredAndLeavesHoldATriangleOnce) {
         const Bvh bvh = build_bvh(scene, options);
         const size_t limit = size_t(double(budget) * double(scene.triangles.size()));
         EXPECT_LE(bvh.primitives.size(), limit) << GetParam() << " budget " << budget;
-        if (budget == 1.0f) EXPECT_EQ(bvh.primitives.size(), scene.triangles.size()) << GetParam();
+        if (budget == 1.0f) {
+            EXPECT_EQ(bvh.primitives.size(), scene.triangles.size()) << GetParam();
+        }
         for (const BvhNode& node : bvh.nodes) {
             if (!node.is_leaf()) continue;
             std::vector<uint32_t> ids(bvh.primitives.begin() + node.first,
