@@ -43,16 +43,12 @@ void radix_sort(std::vector<KeyedReference>& items, int key_bits) {
 
 // Sorts the references by CentroidOrder{axis}, but on precomputed integer keys instead of computing
 // two centroids per comparison and moving 28-byte references: (centroid as an order-preserving
-// integer, primitive) packed into 32 + B bits, B the bit width of the node's largest primitive id,
-// radix-sorted, then one gather. The primitive must be in the key: most references share their
-// centroid with another (the two triangles of a quad, coplanar triangles on an axis-aligned plane;
-// 82 % of those sorted in a crytek_sponza build). Only references equal on both (pieces of one
-// triangle with the same centroid) are compared by CentroidOrder itself, so the order is the same
-// total order. crytek_sponza, 2 threads: the sorts took 40 % of a `spatial` build; with this it went
-// from 999 to 605 ms, and `cbvh` from 706 to 339 ms (same tree). Packing the key into 32 + B bits and
-// sorting it 11 bits per pass (five passes at most for 786k triangles, where 8-bit digits of a 64-bit
-// key took up to seven), from 256 references up instead of 1024: cbvh 259 -> 243 ms, spatial 511 ->
-// 485 ms (same trees; bench/RESULTS.md, session 14).
+// integer, primitive) in 32 + B bits, B the bit width of the node's largest primitive id (fewer radix
+// passes than a fixed 64-bit key), then one gather. The primitive must be in the key: most
+// references share their centroid with another (the two triangles of a quad, coplanar triangles on an
+// axis-aligned plane; 82 % of those sorted in a crytek_sponza build). Only references equal on both
+// (pieces of one triangle with the same centroid) are compared by CentroidOrder itself, so the order
+// is the same total order. Measured in bench/RESULTS.md ("Issue #3, session 14").
 void sort_by_centroid(std::span<Reference> references, int axis) {
     const size_t count = references.size();
     const CentroidOrder order{axis};
