@@ -155,6 +155,41 @@ TEST(ObjectSweep, SplitDoesNotDependOnTheReferencesOrder) {
     EXPECT_GT(checked, 50u);
 }
 
+// The sweep's centroid sort (integer keys of 32 + B bits, radix passes from 256 references up) gives
+// the total CentroidOrder: after a sweep the references are a permutation of the input, sorted on the
+// last axis swept. Large primitive ids (B = 32), many equal centroids, and pieces of one triangle
+// (same primitive, different bounds, equal centroid on some axis) exercise the key's every part.
+TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
+    std::mt19937 random(5);
+    std::uniform_int_distribution<int> coarse(0, 15);
+    for (const size_t count : {size_t(40), size_t(200), size_t(3000)}) {
+        std::vector<Reference> references;
+        for (size_t i = 0; i < count; ++i) {
+            const Vec3 lo(float(coarse(random)), float(coarse(random)), float(coarse(random)));
+            const uint32_t primitive = 0xfffffff0u - uint32_t(i / 3) * 977u;
+            // Three references per primitive: the box, and two pieces sharing its centroid on x.
+            const float half = float(i % 3);
+            references.push_back(Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
+        }
+        std::shuffle(references.begin(), references.end(), random);
+        std::vector<Reference> input = references;
+        const ReferenceSummary summary = build::summarize(references);
+        const Split none;
+        build::ObjectSweepSplitFinder().find({references, summary, references.size(), summary.bounds.area(), none}, CostModel{});
+        int sorted_axes = 0;
+        for (int axis = 0; axis < 3; ++axis) sorted_axes += std::is_sorted(references.begin(), references.end(), build::CentroidOrder{axis});
+        EXPECT_GE(sorted_axes, 1) << count << " references";
+        auto by_everything = [](const Reference& a, const Reference& b) { return build::CentroidOrder{0}(a, b); };
+        std::sort(input.begin(), input.end(), by_everything);
+        std::vector<Reference> output = references;
+        std::sort(output.begin(), output.end(), by_everything);
+        for (size_t i = 0; i < count; ++i) {
+            EXPECT_EQ(output[i].primitive, input[i].primitive) << i;
+            EXPECT_EQ(output[i].bounds, input[i].bounds) << i;
+        }
+    }
+}
+
 // CheapestSplit: the lowest cost wins; of equal costs the lower axis, then the earlier offer.
 TEST(CheapestSplit, EqualCostsGoToTheLowerAxisWhateverTheOfferOrder) {
     auto offer = [](build::CheapestSplit& sink, int axis, float cost, uint32_t tag) {
