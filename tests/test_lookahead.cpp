@@ -164,10 +164,11 @@ TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
     std::uniform_int_distribution<int> coarse(0, 15);
     for (const size_t count : {size_t(40), size_t(200), size_t(3000)}) {
         std::vector<Reference> references;
+        Vec3 lo;
         for (size_t i = 0; i < count; ++i) {
-            const Vec3 lo(float(coarse(random)), float(coarse(random)), float(coarse(random)));
+            // Three references per primitive: its box and two pieces sharing the box's centroid on x.
+            if (i % 3 == 0) lo = Vec3(float(coarse(random)), float(coarse(random)), float(coarse(random)));
             const uint32_t primitive = 0xfffffff0u - uint32_t(i / 3) * 977u;
-            // Three references per primitive: the box, and two pieces sharing its centroid on x.
             const float half = float(i % 3);
             references.push_back(Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
         }
@@ -179,10 +180,9 @@ TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
         int sorted_axes = 0;
         for (int axis = 0; axis < 3; ++axis) sorted_axes += std::is_sorted(references.begin(), references.end(), build::CentroidOrder{axis});
         EXPECT_GE(sorted_axes, 1) << count << " references";
-        auto by_everything = [](const Reference& a, const Reference& b) { return build::CentroidOrder{0}(a, b); };
-        std::sort(input.begin(), input.end(), by_everything);
+        std::sort(input.begin(), input.end(), build::CentroidOrder{0});
         std::vector<Reference> output = references;
-        std::sort(output.begin(), output.end(), by_everything);
+        std::sort(output.begin(), output.end(), build::CentroidOrder{0});
         for (size_t i = 0; i < count; ++i) {
             EXPECT_EQ(output[i].primitive, input[i].primitive) << i;
             EXPECT_EQ(output[i].bounds, input[i].bounds) << i;
