@@ -58,11 +58,7 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
         const __m128 scaled_org = _mm_mul_ps(org, inv), exit_scaled_org = _mm_mul_ps(org, exit_inv);
         const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
         const __m128 infinity = _mm_set1_ps(std::numeric_limits<float>::infinity());
-        // |x| 2^-21 + 2^-140: the slack of the offsets.
-        const __m128 scaled_slack = _mm_add_ps(_mm_mul_ps(_mm_and_ps(scaled_org, magnitude), _mm_set1_ps(0x1p-21f)),
-                                               _mm_set1_ps(0x1p-140f));
-        const __m128 exit_slack = _mm_add_ps(_mm_mul_ps(_mm_and_ps(exit_scaled_org, magnitude), _mm_set1_ps(0x1p-21f)),
-                                             _mm_set1_ps(0x1p-140f));
+        const __m128 scaled_slack = slack(scaled_org), exit_slack = slack(exit_scaled_org);
         // Finite lanes (|x| < inf is false for NaN) take the fused constants, the others scale 0 and
         // offsets +-inf.
         const __m128 finite = _mm_and_ps(_mm_cmplt_ps(_mm_and_ps(exit_inv, magnitude), infinity),
@@ -73,6 +69,12 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
         const __m128 minus_infinity = _mm_sub_ps(_mm_setzero_ps(), infinity);
         exit_offset = _mm_or_ps(_mm_and_ps(finite, _mm_sub_ps(exit_scaled_org, exit_slack)), _mm_andnot_ps(finite, minus_infinity));
         negative = unsigned(_mm_movemask_ps(inv)) & 7u;
+    }
+
+    // |x| 2^-21 + 2^-140: the slack of an offset x.
+    static __m128 slack(__m128 x) {
+        const __m128 magnitude = _mm_and_ps(x, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)));
+        return _mm_add_ps(_mm_mul_ps(magnitude, _mm_set1_ps(0x1p-21f)), _mm_set1_ps(0x1p-140f));
     }
 
     static float lane(__m128 values, int axis) {
