@@ -660,3 +660,25 @@ INSTANTIATE_TEST_SUITE_P(Lookahead, LookaheadBuilder,
                          ::testing::Values(std::make_tuple("cbvh", 1u), std::make_tuple("cbvh", 2u),
                                            std::make_tuple("spatial", 1u)),
                          lookahead_name);
+
+// Recursive cost evaluation to the leaves at the top of the tree (BuildOptions::lookahead_top_share;
+// the pricing is tested in test_lookahead.cpp): valid trees that answer as the arbiter does, the same
+// for 1 and 2 threads, and never above the greedy tree's SAH. On the interior (a room around dense
+// objects, as living_room_3) the greedy step's top choices are not the best: the SAH must drop.
+TEST(LookaheadTop, TreesAreValidCorrectDeterministicAndNoWorseThanGreedy) {
+    const Scene soup = soup_prefix(6000);  // big enough for the parallel paths of the pricing (4096 references)
+    BuildOptions options = options_for("spatial");
+    options.lookahead_top_share = 0.1f;
+    const Bvh bvh = build_in_arena(2, soup, options);
+    EXPECT_EQ(tree_violations(soup, bvh, options), "");
+    const BinaryTracer tracer(soup, bvh);
+    EXPECT_EQ(wrong_against_arbiter(soup, tracer, probing_rays(soup, 1500, 13)), "");
+    EXPECT_EQ(first_difference(build_in_arena(1, soup, options), bvh), "") << "1 vs 2 threads";
+
+    const Scene& interior = cached_builtin_scene("interior");
+    BuildOptions greedy = options_for("spatial");
+    const double greedy_sah = tree_sah(build_bvh(interior, greedy), greedy.cost);
+    const double looked_ahead_sah = tree_sah(build_bvh(interior, options), options.cost);
+    EXPECT_LT(looked_ahead_sah, 0.99 * greedy_sah);
+    RecordProperty("interior_sah", std::to_string(greedy_sah) + " -> " + std::to_string(looked_ahead_sah));
+}

@@ -374,6 +374,24 @@ TEST_F(Cli, LookaheadInBuildAndCompare) {
     expect_clean_failure("compare builtin:soup --builders 'cbvh@lookahead=-1'", {"lookahead"});
 }
 
+// `--lookahead-top S` and `NAME@top=S`: nodes with at least that share of the references look ahead
+// to the leaves; the setting is reported, the trees answer correctly, absurd shares are refused.
+TEST_F(Cli, LookaheadTopInBuildAndCompare) {
+    const CliResult build = run("build builtin:soup --builder spatial --lookahead-top 0.5 --no-epo --json t.json");
+    ASSERT_EQ(build.exit_code, 0) << build.output;
+    EXPECT_FLOAT_EQ(read_json("t.json")["lookahead_top_share"].get<float>(), 0.5f);
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@top=0.5' --embree medium "
+                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                                         3, rows));
+    EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("spatial@top=0.5", 0), 0u) << rows[1];
+    EXPECT_LE(rows[1]["sah"].get<double>(), rows[0]["sah"].get<double>() * (1 + 1e-6));
+    for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
+    expect_clean_failure("build builtin:soup --builder spatial --lookahead-top 2 --no-epo", {"lookahead top share", "got 2"});
+    expect_clean_failure("build builtin:soup --builder embree-high --lookahead-top 0.5 --no-epo", {"lookahead"});
+    expect_clean_failure("compare builtin:soup --builders 'spatial@top=0.001'", {"lookahead top share"});
+}
+
 // A compare row's own settings mean what the build flags of the same name mean: `bins=` is `--bins`
 // (the binned object search space), `spatialbins=` is `--spatial-bins`. Each row's tree has the
 // SAH that `build` gives with the flag, and differs from the default tree.

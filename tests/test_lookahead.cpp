@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <memory>
 #include <random>
 #include <vector>
@@ -15,8 +16,10 @@
 #include "build/object_sweep_split_finder.hpp"
 #include "build/partition.hpp"
 #include "build/split_search.hpp"
+#include "build/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/metrics.hpp"
 #include "test_support.hpp"
 
 namespace spacebvh {
@@ -277,6 +280,93 @@ TEST(SplitSearch, CandidatesStartWithTheCheapestSplit) {
     }
 }
 
+// Each search space's cheapest split, the cheapest of them first: the options of the lookahead to
+// the leaves at the top of the tree. The list holds exactly the valid find() results, each found as
+// cheapest() walks the spaces (the spatial gate reads the cheapest split of the spaces before it).
+TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
+    size_t lists = 0, with_several = 0;
+    for (float gate_alpha : {0.0f, 1e-5f}) {
+        for (float overlap_penalty : {0.0f, 1.0f}) {
+            CostModel cost;
+            cost.overlap_penalty = overlap_penalty;
+            for (TestNode& node : test_nodes()) {
+                const auto spaces = every_search_space(*node.scene, gate_alpha);
+                const float root_area = node.scene->bounds().area();
+                const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, root_area);
+                const ReferenceSummary summary = build::summarize(node.references);
+                std::vector<Reference> a = node.references, b = node.references;
+                const Split cheapest = search.cheapest(a, summary, a.size() * 2);
+                const std::vector<Split> per_space = search.cheapest_per_space(b, summary, b.size() * 2);
+                ASSERT_EQ(cheapest.is_valid(), !per_space.empty());
+                if (per_space.empty()) continue;
+                EXPECT_TRUE(same_split(per_space.front(), cheapest));
+                // By hand: the walk of cheapest(), every valid offer kept.
+                std::vector<Split> expected;
+                Split best;
+                for (const auto& space : spaces) {
+                    std::vector<Reference> c = node.references;
+                    const build::NodeContext context{c, summary, c.size() * 2, root_area, best, search.must_split(c.size())};
+                    const Split found = space->find(context, cost);
+                    if (!found.is_valid()) continue;
+                    if (found.cost < best.cost) best = found;
+                    expected.push_back(found);
+                }
+                ASSERT_EQ(per_space.size(), expected.size());
+                for (const Split& split : per_space) {
+                    EXPECT_TRUE(split.is_valid());
+                    EXPECT_GE(split.cost, cheapest.cost);
+                    EXPECT_EQ(std::count_if(expected.begin(), expected.end(), [&](const Split& e) { return same_split(e, split); }), 1);
+                }
+                ++lists;
+                with_several += per_space.size() > 1;
+            }
+        }
+    }
+    EXPECT_GT(lists, 20u);
+    EXPECT_GT(with_several, 10u) << "the object and spatial spaces should both offer splits";
+}
+
+// The lookahead to the leaves (DriverOptions::lookahead_top_share): at a node it prices each search
+// space's cheapest split by the SAH of the whole greedy subtree. Checked against the driver itself:
+// the greedy option's price is the SAH of the tree the greedy driver builds over the node, and the
+// chosen option's price is the SAH of the tree the driver builds when the node looks ahead (its
+// children below the share, so greedy). Never above the greedy tree.
+TEST(Lookahead, ToTheLeavesPricesOptionsByTheTreesTheDriverBuilds) {
+    CostModel cost;
+    cost.overlap_penalty = 1.0f;
+    const build::BuildLimits limits;
+    size_t checked = 0;
+    for (TestNode& node : test_nodes()) {
+        const uint32_t count = uint32_t(node.references.size());
+        if (count < 300) continue;
+        SCOPED_TRACE(std::to_string(count) + " references");
+        const size_t capacity = count + count / 4;
+        const ReferenceSummary summary = build::summarize(node.references);
+        const double area = summary.bounds.area();
+        const auto spaces = every_search_space(*node.scene);
+        const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+        const build::Lookahead to_the_leaves(search, limits.max_depth, 0, nullptr);
+        std::vector<Reference> storage = node.references;
+        storage.resize(capacity);
+        const build::LookaheadChoice choice = to_the_leaves.choose(storage, count, summary, 0);
+        EXPECT_EQ(choice.options, spaces.size()) << "one option per search space (all offer a split here)";
+        EXPECT_LE(choice.cost, choice.greedy_cost);
+
+        auto driver_tree_sah = [&](float top_share) {
+            build::DriverOptions options;
+            options.lookahead_top_share = top_share;
+            build::TopDownBuilder builder(cost, limits, every_search_space(*node.scene), node.scene->triangles, options);
+            return tree_sah(builder.build(node.references, capacity), cost);
+        };
+        const double greedy_sah = driver_tree_sah(0.0f), looked_ahead_sah = driver_tree_sah(1.0f);
+        EXPECT_NEAR(choice.greedy_cost / area, greedy_sah, 1e-5 * greedy_sah);
+        EXPECT_NEAR(choice.cost / area, looked_ahead_sah, 1e-5 * looked_ahead_sah);
+        EXPECT_LE(looked_ahead_sah, greedy_sah * (1 + 1e-6));
+        ++checked;
+    }
+    EXPECT_EQ(checked, 4u);
+}
+
 // The lookahead's choice: never priced above the greedy decision; the greedy decision priced as the
 // greedy subtree of the node; and, one level deep, by the definition: C_T*SA(N) plus, per child, its
 // leaf cost or its cheapest split's local cost (whichever the greedy step takes), area-weighted.
@@ -349,6 +439,14 @@ TEST(Lookahead, InvalidSettingsAreRejected) {
     EXPECT_THROW(options.validate(), Error);
     options.lookahead_candidates = 3;
     EXPECT_NO_THROW(options.validate());
+    for (float share : {0.001f, -0.5f, 1.5f, std::nanf(""), kInfinity}) {
+        options.lookahead_top_share = share;
+        EXPECT_THROW(options.validate(), Error) << share;
+    }
+    for (float share : {0.0f, kMinLookaheadTopShare, 0.5f, 1.0f}) {
+        options.lookahead_top_share = share;
+        EXPECT_NO_THROW(options.validate()) << share;
+    }
 }
 
 // Cancellation: a flag set while the build runs (here from the progress callback, once the first

@@ -84,6 +84,12 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--lookahead-candidates", lookahead_candidates,
                        "candidates the lookahead compares: the cheapest splits per axis and search space")
         ->capture_default_str();
+    command.add_option("--lookahead-top", lookahead_top,
+                       "recursive cost evaluation to the leaves at the top of the tree: nodes holding at least this "
+                       "share of the root's references take the search space whose cheapest split leads to the "
+                       "subtree of lowest SAH, each built out greedily (0 = off; about one build per search space "
+                       "and level of such nodes)")
+        ->capture_default_str();
     command.add_flag("--spatial-sweep", spatial_sweep,
                      "kd planes at every reference bound with exact child boxes (the sweep) instead of --spatial-bins bins");
     command.add_option("--sweep-samples", sweep_samples,
@@ -140,6 +146,7 @@ BuildOptions BuildCliOptions::options(const std::string& builder_text) const {
     options.grid_splitting = !no_grid_splitting;
     options.lookahead_depth = lookahead;
     options.lookahead_candidates = lookahead_candidates;
+    options.lookahead_top_share = lookahead_top;
     options.cancel = interrupt_flag();
     options.exact_spatial_sweep = spatial_sweep;
     options.sweep_interior_samples = sweep_samples;
@@ -273,7 +280,7 @@ size_t peak_rss_bytes() {
 }
 
 Bvh build_tree(const Scene& scene, const BuildOptions& options) {
-    if (is_embree_tree(options.builder) && options.lookahead_depth > 0)
+    if (is_embree_tree(options.builder) && (options.lookahead_depth > 0 || options.lookahead_top_share > 0))
         throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
     const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
     Bvh bvh;

@@ -42,6 +42,7 @@ struct BuildCliOptions {
     uint32_t grid_max_cells = 8;
     bool no_grid_splitting = false;
     uint32_t lookahead = 0, lookahead_candidates = 2;
+    float lookahead_top = 0;
     bool spatial_sweep = false;
     uint32_t sweep_samples = 0;
     bool optimize = false;  // reinsertion optimisation after the build

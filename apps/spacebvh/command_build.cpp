@@ -61,6 +61,7 @@ void add_build_command(CLI::App& app) {
                                                      ? nlohmann::json("inf")
                                                      : nlohmann::json(build_options.cost.overlap_penalty)}}},
                                {"lookahead_depth", build_options.lookahead_depth},
+                               {"lookahead_top_share", build_options.lookahead_top_share},
                                {"reinsertion_iterations", build_options.reinsertion_iterations},
                                {"build_ms", build_ms},
                                {"peak_rss_bytes", peak_rss},

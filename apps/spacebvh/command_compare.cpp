@@ -107,7 +107,7 @@ std::string ratio_text(double value, double reference, int precision) {
     return text.str();
 }
 
-// "NAME" or "NAME@co=0.3;ct=3;ci=1;leaf=8;block=4;budget=1.5;bins=64;spatialbins=64;gate=1e-5;search=object+grid;grid=2;gridmax=8;lookahead=2;optimize=16":
+// "NAME" or "NAME@co=0.3;ct=3;ci=1;leaf=8;block=4;budget=1.5;bins=64;spatialbins=64;gate=1e-5;search=object+grid;grid=2;gridmax=8;lookahead=2;top=0.25;optimize=16":
 // a builder with some options of its own, each key named after its build flag (bins: --bins, the
 // binned object search space's; spatialbins: --spatial-bins). "NAME+opt" is NAME with the
 // reinsertion optimisation; the label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
@@ -138,11 +138,12 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "gridmax") spec.options.grid_max_cells = parse_unsigned(value, "gridmax");
             else if (key == "lookahead") spec.options.lookahead_depth = parse_unsigned(value, "lookahead");
             else if (key == "candidates") spec.options.lookahead_candidates = parse_unsigned(value, "candidates");
+            else if (key == "top") spec.options.lookahead_top_share = parse_float_or_inf(value, "top");
             else if (key == "sweep") spec.options.exact_spatial_sweep = parse_unsigned(value, "sweep") != 0;
             else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
             else if (key == "optimize") spec.options.reinsertion_iterations = parse_unsigned(value, "optimize");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, sweep, samples, optimize)");
+                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize)");
         }
         spec.options.validate();
     }
@@ -208,7 +209,7 @@ void add_compare_command(CLI::App& app) {
     CLI::App* command = app.add_subcommand(
         "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
+    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;top=S;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();

@@ -57,6 +57,9 @@ std::string search_space_names(uint32_t search_spaces);
 
 // The deepest recursive cost evaluation BuildOptions accepts (the cost grows about linearly with it).
 inline constexpr uint32_t kMaxLookaheadDepth = 8;
+// The smallest BuildOptions::lookahead_top_share: below it the nodes priced by whole subtrees, and the
+// build time, grow without bound for little gain.
+inline constexpr float kMinLookaheadTopShare = 0.01f;
 // Reinsertion optimisation: the most iterations BuildOptions accepts, and the effort of --optimize.
 inline constexpr uint32_t kMaxReinsertionIterations = 1000;
 inline constexpr uint32_t kDefaultReinsertionIterations = 16;
@@ -94,6 +97,14 @@ struct BuildOptions {
     uint32_t lookahead_depth = 0;
     // The candidates it compares: this many of the cheapest splits per axis and search space (1..16).
     uint32_t lookahead_candidates = 2;
+    // Recursive cost evaluation to the leaves at the top of the tree: a node holding at least this
+    // share of the root's references prices each search space's cheapest split (and the leaf, where
+    // allowed) by the SAH of the whole subtree it leads to, built greedily, and takes the cheapest.
+    // The greedy step prices children as leaves, which is furthest from the truth at the top, where
+    // most of the tree's SAH sits (bench/RESULTS.md, session 16). 0 = off; else in
+    // [kMinLookaheadTopShare, 1]. Costs about one greedy build per search space for each level of
+    // such nodes.
+    float lookahead_top_share = 0.0f;
     // Presets with spatial search (kdbvh, spatial, sbvh) evaluate kd planes at every reference bound
     // event with exact child boxes (SearchSpace::spatial_sweep) instead of on --spatial-bins bins.
     // Off by default: measured not to pay for its build time (bench/SWEEP_RESULTS.md).

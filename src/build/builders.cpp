@@ -199,6 +199,9 @@ void BuildOptions::validate() const {
     if (lookahead_depth > kMaxLookaheadDepth)
         throw Error("lookahead depth must be in [0, " + std::to_string(kMaxLookaheadDepth) + "], got " +
                     std::to_string(lookahead_depth));
+    if (!(lookahead_top_share == 0.0f || (lookahead_top_share >= kMinLookaheadTopShare && lookahead_top_share <= 1.0f)))
+        throw Error("lookahead top share must be 0 (off) or in [" + std::to_string(kMinLookaheadTopShare) +
+                    ", 1] (a share of the root's references), got " + std::to_string(lookahead_top_share));
     if (sweep_interior_samples > 64)
         throw Error("sweep interior samples must be in [0, 64], got " + std::to_string(sweep_interior_samples));
     if (lookahead_candidates < 1 || lookahead_candidates > 16)
@@ -233,6 +236,7 @@ Bvh build_bvh(const Scene& scene, const BuildOptions& options) {
     build::DriverOptions driver;
     driver.lookahead_depth = options.lookahead_depth;
     driver.lookahead_candidates = options.lookahead_candidates;
+    driver.lookahead_top_share = options.lookahead_top_share;
     // With the optimisation, the build reports the first half of the progress and the optimiser the rest.
     const bool optimizing = options.reinsertion_iterations > 0;
     driver.progress = options.progress;

@@ -67,7 +67,9 @@ LookaheadChoice Lookahead::choose(std::span<Reference> storage, uint32_t count, 
     const std::span<Reference> references = storage.first(count);
     const CostModel& cost = search_.cost();
     const bool must_split = search_.must_split(count);
-    const std::vector<Split> candidates = search_.candidates(references, summary, storage.size(), candidates_per_axis_);
+    const std::vector<Split> candidates = candidates_per_axis_ == 0
+                                              ? search_.cheapest_per_space(references, summary, storage.size())
+                                              : search_.candidates(references, summary, storage.size(), candidates_per_axis_);
 
     // The greedy decision, exactly as SplitSearch::greedy_decision makes it (candidates[0] is the
     // cheapest split).

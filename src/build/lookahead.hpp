@@ -6,7 +6,9 @@
 //   options    the leaf (unless N must be split), and the candidates: each search space's K
 //              cheapest splits on each axis (SplitSearch::candidates; K = candidates_per_axis,
 //              BuildOptions::lookahead_candidates), the greedy split among them. So at most 1 + 3K
-//              options per search space, and 1 + 6K for object + spatial.
+//              options per search space, and 1 + 6K for object + spatial. With K = 0, each search
+//              space's cheapest split (SplitSearch::cheapest_per_space): the choice between kinds of
+//              split, as the driver makes it at the top of the tree (lookahead to the leaves).
 //   evaluation a candidate is applied to a copy of N's references (its reference budget included)
 //              and its children are built greedily D - 1 more levels (SplitSearch::greedy_decision
 //              at every node, as the driver would). Its cost is the subtree's SAH weighted by area:
@@ -41,7 +43,8 @@ struct LookaheadChoice {
 
 class Lookahead {
 public:
-    // `cancel` (may be null) is polled between evaluated nodes; when set, evaluation throws Cancelled.
+    // `candidates_per_axis` = 0: each search space's cheapest split (see above). `cancel` (may be null)
+    // is polled between evaluated nodes; when set, evaluation throws Cancelled.
     Lookahead(const SplitSearch& search, uint32_t depth, uint32_t candidates_per_axis, const std::atomic<bool>* cancel)
         : search_(search), depth_(depth), candidates_per_axis_(candidates_per_axis), cancel_(cancel) {}
 

@@ -14,16 +14,17 @@ Split SplitSearch::cheapest(std::span<Reference> references, const ReferenceSumm
     return best;
 }
 
-std::vector<Split> SplitSearch::candidates(std::span<Reference> references, const ReferenceSummary& summary,
-                                           size_t capacity, uint32_t per_axis) const {
+template <class Offers>
+std::vector<Split> SplitSearch::collect(std::span<Reference> references, const ReferenceSummary& summary,
+                                        size_t capacity, Offers&& offers) const {
     // The same walk as cheapest(): each space sees the cheapest split of the spaces before it (the
-    // spatial gate reads it), and the first cheapest candidate is cheapest()'s split.
+    // spatial gate reads it), and the first cheapest offer, cheapest()'s split, is moved to the front.
     Split best;
     size_t best_index = 0;
     std::vector<Split> all;
     for (const auto& search_space : search_spaces_) {
         const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size())};
-        for (const Split& candidate : search_space->find_candidates(context, cost_, per_axis)) {
+        for (const Split& candidate : offers(*search_space, context)) {
             if (candidate.cost < best.cost) {
                 best = candidate;
                 best_index = all.size();
@@ -33,6 +34,21 @@ std::vector<Split> SplitSearch::candidates(std::span<Reference> references, cons
     }
     if (!all.empty()) std::rotate(all.begin(), all.begin() + best_index, all.begin() + best_index + 1);
     return all;
+}
+
+std::vector<Split> SplitSearch::candidates(std::span<Reference> references, const ReferenceSummary& summary,
+                                           size_t capacity, uint32_t per_axis) const {
+    return collect(references, summary, capacity, [&](const SplitFinder& space, const NodeContext& context) {
+        return space.find_candidates(context, cost_, per_axis);
+    });
+}
+
+std::vector<Split> SplitSearch::cheapest_per_space(std::span<Reference> references, const ReferenceSummary& summary,
+                                                   size_t capacity) const {
+    return collect(references, summary, capacity, [&](const SplitFinder& space, const NodeContext& context) {
+        const Split split = space.find(context, cost_);
+        return split.is_valid() ? std::vector<Split>{split} : std::vector<Split>{};
+    });
 }
 
 std::optional<Split> SplitSearch::greedy_decision(std::span<Reference> references, const ReferenceSummary& summary,

@@ -44,6 +44,11 @@ public:
     std::vector<Split> candidates(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity,
                                   uint32_t per_axis) const;
 
+    // Each search space's cheapest split (the invalid ones left out), cheapest()'s split first. May
+    // reorder the references.
+    std::vector<Split> cheapest_per_space(std::span<Reference> references, const ReferenceSummary& summary,
+                                          size_t capacity) const;
+
     // The greedy decision for a node that may be split (!must_be_leaf): nothing when it should be a
     // leaf (no split beats C_I*|N| and the node may be a leaf); else the cheapest split, or the
     // median split when the node must be split and no search space offers a feasible one.
@@ -57,6 +62,11 @@ public:
                                      const ReferenceSummary& summary) const;
 
 private:
+    // The splits `offers(space, context)` gives for each search space in turn, cheapest() first.
+    template <class Offers>
+    std::vector<Split> collect(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity,
+                               Offers&& offers) const;
+
     CostModel cost_;
     BuildLimits limits_;
     std::span<const std::unique_ptr<SplitFinder>> search_spaces_;

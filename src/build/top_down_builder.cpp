@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 
 #include "build/lookahead.hpp"
 #include "build/partition.hpp"
@@ -29,6 +30,8 @@ struct TopDownBuilder::Impl {
     const TopDownBuilder& builder;
     const SplitSearch& search;
     const Lookahead& lookahead;
+    const Lookahead& whole_subtree_lookahead;  // for nodes of at least `top_node_references`
+    size_t top_node_references = 0;            // 0: no node looks ahead to the leaves
     std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
     size_t input_count = 0;
     std::vector<SlotNode> slots{};
@@ -60,9 +63,13 @@ struct TopDownBuilder::Impl {
             builder.options_.progress(double(references_in_leaves.load()) / double(input_count));
 
         std::span<Reference> storage(references.data() + begin, capacity);
-        std::optional<Split> split = builder.options_.lookahead_depth == 0
-                                         ? search.greedy_decision(storage.first(count), summary, capacity)
-                                         : lookahead.choose(storage, count, summary, depth).split;
+        std::optional<Split> split;
+        if (top_node_references > 0 && count >= top_node_references)
+            split = whole_subtree_lookahead.choose(storage, count, summary, depth).split;
+        else if (builder.options_.lookahead_depth > 0)
+            split = lookahead.choose(storage, count, summary, depth).split;
+        else
+            split = search.greedy_decision(storage.first(count), summary, capacity);
         if (!split) return make_leaf(node);
         const std::optional<ChildRanges> applied = search.apply(storage, count, *split, summary);
         if (!applied) return make_leaf(node);
@@ -133,8 +140,16 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     const ReferenceSummary root = summarize(references);
     const SplitSearch search(cost_, limits_, search_spaces_, triangles_, root.bounds.area());
     const Lookahead lookahead(search, options_.lookahead_depth, options_.lookahead_candidates, options_.cancel);
-    Impl impl{*this, search, lookahead, std::move(references)};
+    // Depth max_depth reaches every leaf (nodes there are leaves whatever their size). The options are
+    // each search space's cheapest split: at the top of the tree the greedy step's error is in which
+    // kind of split it takes (object or spatial), and the subtrees are too big to build more than a
+    // few (on coffee_maker and living_room_3, the per-axis candidates cost 2.6-2.8x the time for the
+    // same SAH to 0.1 %, bench/RESULTS.md).
+    const Lookahead whole_subtree_lookahead(search, limits_.max_depth, 0, options_.cancel);
+    Impl impl{*this, search, lookahead, whole_subtree_lookahead, 0, std::move(references)};
     impl.input_count = count;
+    if (options_.lookahead_top_share > 0)
+        impl.top_node_references = std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))));
     impl.references.resize(capacity);
     impl.slots.resize(2 * capacity - 1);
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);

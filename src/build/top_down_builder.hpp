@@ -2,7 +2,8 @@
 // every configured search space, take the configuration of lowest cost under the cost model, and make
 // a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit) -
 // the greedy step of build/split_search.hpp - or, with a lookahead depth, choose among the search
-// spaces' best candidates by recursive cost evaluation (build/lookahead.hpp).
+// spaces' best candidates by recursive cost evaluation (build/lookahead.hpp). Nodes at the top of the
+// tree (DriverOptions::lookahead_top_share) may look ahead to the leaves, whatever the depth.
 #pragma once
 
 #include <atomic>
@@ -21,6 +22,8 @@ namespace spacebvh::build {
 struct DriverOptions {
     uint32_t lookahead_depth = 0;               // recursive cost evaluation (build/lookahead.hpp); 0 = greedy
     uint32_t lookahead_candidates = 2;          // its candidates per axis and search space
+    float lookahead_top_share = 0;              // nodes with this share of the root's references look
+                                                // ahead to the leaves (0 = none)
     std::function<void(double)> progress;       // fraction of references that reached a leaf
     const std::atomic<bool>* cancel = nullptr;  // polled between nodes; when set, build() throws Cancelled
 };
