@@ -101,12 +101,12 @@ struct PyTracer {
 PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optional<float> overlap_penalty,
             float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
             float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
-            std::optional<float> spatial_gate, uint32_t optimize, int threads) {
+            std::optional<float> spatial_gate, float lookahead_top, uint32_t optimize, int threads) {
     // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
     // optimiser apply to them, our search options do not.
     const bool embree_tree = is_embree_tree(builder);
-    if (embree_tree && (!search.empty() || spatial_gate))
-        throw Error("search and spatial_gate apply to our builders, not to Embree's tree '" + builder + "'");
+    if (embree_tree && (!search.empty() || spatial_gate || lookahead_top != 0.0f))
+        throw Error("search, spatial_gate and lookahead_top apply to our builders, not to Embree's tree '" + builder + "'");
     BuildOptions options = options_for(embree_tree ? "binned" : builder);
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
     options.object_bins = object_bins;
@@ -118,6 +118,7 @@ PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optio
     options.cost.leaf_block = leaf_block;
     options.max_leaf_size = max_leaf_size;
     options.reference_budget = reference_budget;
+    options.lookahead_top_share = lookahead_top;
     options.reinsertion_iterations = optimize;
     options.validate();
     auto bvh = std::make_shared<Bvh>();
@@ -398,12 +399,14 @@ PYBIND11_MODULE(spacebvh, m) {
           py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,
           py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u, py::arg("reference_budget") = 1.3f,
           py::arg("search") = "", py::arg("object_bins") = 32u, py::arg("spatial_bins") = 32u,
-          py::arg("spatial_gate") = py::none(),
+          py::arg("spatial_gate") = py::none(), py::arg("lookahead_top") = 0.0f,
           py::arg("optimize") = 0u, py::arg("threads") = 0,
           "Builds a BVH with a named builder (builders()); overlap_penalty defaults to the builder's own C_o "
           "(float('inf'): disjoint children only); search = the CLI's --search ('binned,spatial': the fast spatial "
           "variant; '' = the builder's own); object_bins, spatial_bins = --bins, --spatial-bins; spatial_gate = "
-          "--spatial-gate (None = the builder's own alpha); "
+          "--spatial-gate (None = the builder's own alpha); lookahead_top = --lookahead-top (nodes with at least "
+          "this share of the references choose their split by building each search space's best out to the leaves; "
+          "0 = off); "
           "optimize = reinsertion iterations (0 = off, 16 = the CLI's --optimize). Deterministic whatever `threads`.");
 
     py::class_<PyTracer>(m, "Tracer", "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.")

@@ -219,6 +219,14 @@ class TracingTests(unittest.TestCase):
             spacebvh.build(self.scene, "spatial", search="sideways")
         with self.assertRaisesRegex(spacebvh.Error, "gate"):
             spacebvh.build(self.scene, "spatial", spatial_gate=math.nan)
+        # lookahead_top is --lookahead-top: never above the greedy tree's SAH, same answers.
+        looked_ahead = spacebvh.build(self.scene, "spatial", lookahead_top=0.25)
+        self.assertLessEqual(looked_ahead.sah, spacebvh.build(self.scene, "spatial").sah * (1 + 1e-6))
+        self.check_against_brute_force(spacebvh.Tracer(looked_ahead, "binary"))
+        with self.assertRaisesRegex(spacebvh.Error, "lookahead top share"):
+            spacebvh.build(self.scene, "spatial", lookahead_top=3.0)
+        with self.assertRaisesRegex(spacebvh.Error, "lookahead_top"):
+            spacebvh.build(self.scene, "embree-high", lookahead_top=0.5)
 
     def test_same_tree_and_answers_for_any_thread_count(self):
         one = spacebvh.build(self.scene, "spatial", threads=1)
