@@ -681,4 +681,10 @@ TEST(LookaheadTop, TreesAreValidCorrectDeterministicAndNoWorseThanGreedy) {
     const double looked_ahead_sah = tree_sah(build_bvh(interior, options), options.cost);
     EXPECT_LT(looked_ahead_sah, 0.99 * greedy_sah);
     RecordProperty("interior_sah", std::to_string(greedy_sah) + " -> " + std::to_string(looked_ahead_sah));
+
+    // One search space (cbvh): nothing to choose between, the greedy tree.
+    BuildOptions object_only = options_for("cbvh");
+    const Bvh greedy_cbvh = build_bvh(soup, object_only);
+    object_only.lookahead_top_share = 0.1f;
+    EXPECT_EQ(first_difference(build_bvh(soup, object_only), greedy_cbvh), "");
 }

@@ -103,7 +103,7 @@ struct BuildOptions {
     // The greedy step prices children as leaves, which is furthest from the truth at the top, where
     // most of the tree's SAH sits (bench/RESULTS.md, session 16). 0 = off; else in
     // [kMinLookaheadTopShare, 1]. Costs about one greedy build per search space for each level of
-    // such nodes.
+    // such nodes. Builders with one search space (cbvh, binned, kdbvh) have nothing to choose: no effect.
     float lookahead_top_share = 0.0f;
     // Presets with spatial search (kdbvh, spatial, sbvh) evaluate kd planes at every reference bound
     // event with exact child boxes (SearchSpace::spatial_sweep) instead of on --spatial-bins bins.

@@ -148,7 +148,8 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     const Lookahead whole_subtree_lookahead(search, limits_.max_depth, 0, options_.cancel);
     Impl impl{*this, search, lookahead, whole_subtree_lookahead, 0, std::move(references)};
     impl.input_count = count;
-    if (options_.lookahead_top_share > 0)
+    // With one search space there is no kind of split to choose between: the greedy step decides.
+    if (options_.lookahead_top_share > 0 && search_spaces_.size() > 1)
         impl.top_node_references = std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))));
     impl.references.resize(capacity);
     impl.slots.resize(2 * capacity - 1);
