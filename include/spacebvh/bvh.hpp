@@ -101,7 +101,7 @@ struct BuildOptions {
     // share of the root's references prices each search space's cheapest split (and the leaf, where
     // allowed) by the SAH of the whole subtree it leads to, built greedily, and takes the cheapest.
     // The greedy step prices children as leaves, which is furthest from the truth at the top, where
-    // most of the tree's SAH sits (bench/RESULTS.md, session 16). 0 = off; else in
+    // most of the tree's SAH sits (bench/LOOKAHEAD_RESULTS.md, session 16). 0 = off; else in
     // [kMinLookaheadTopShare, 1]. Costs about one greedy build per search space for each level of
     // such nodes. Builders with one search space (cbvh, binned, kdbvh) have nothing to choose: no effect.
     float lookahead_top_share = 0.0f;

@@ -143,8 +143,8 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     // Depth max_depth reaches every leaf (nodes there are leaves whatever their size). The options are
     // each search space's cheapest split: at the top of the tree the greedy step's error is in which
     // kind of split it takes (object or spatial), and the subtrees are too big to build more than a
-    // few (on coffee_maker and living_room_3, the per-axis candidates cost 2.6-2.8x the time for the
-    // same SAH to 0.1 %, bench/RESULTS.md).
+    // few (on coffee_maker and living_room_3, the per-axis candidates cost 2.7-2.9x the time for the
+    // same SAH to 0.1 %, bench/LOOKAHEAD_RESULTS.md).
     const Lookahead whole_subtree_lookahead(search, limits_.max_depth, 0, options_.cancel);
     Impl impl{*this, search, lookahead, whole_subtree_lookahead, 0, std::move(references)};
     impl.input_count = count;
