@@ -367,6 +367,33 @@ TEST(Lookahead, ToTheLeavesPricesOptionsByTheTreesTheDriverBuilds) {
     EXPECT_EQ(checked, 4u);
 }
 
+// A node with nothing to compare (one search space, must be split) takes the greedy split unpriced:
+// pricing it to the leaves would build its whole subtree for nothing.
+TEST(Lookahead, SingleOptionIsTheGreedyDecisionUnpriced) {
+    const CostModel cost;
+    const build::BuildLimits limits;
+    size_t checked = 0;
+    for (TestNode& node : test_nodes()) {
+        const uint32_t count = uint32_t(node.references.size());
+        if (!(count > limits.max_leaf_size)) continue;
+        std::vector<std::unique_ptr<build::SplitFinder>> spaces;
+        spaces.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
+        const ReferenceSummary summary = build::summarize(node.references);
+        const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+        std::vector<Reference> storage = node.references, expected_storage = node.references;
+        const build::LookaheadChoice choice =
+            build::Lookahead(search, limits.max_depth, 0, nullptr).choose(storage, count, summary, 0);
+        const std::optional<Split> greedy = search.greedy_decision(expected_storage, summary, count);
+        ASSERT_TRUE(greedy && choice.split);
+        EXPECT_TRUE(same_split(*choice.split, *greedy)) << count << " references";
+        EXPECT_EQ(choice.options, 1u);
+        EXPECT_TRUE(choice.greedy);
+        EXPECT_EQ(choice.cost, 0.0);
+        ++checked;
+    }
+    EXPECT_GE(checked, 6u);
+}
+
 // The lookahead's choice: never priced above the greedy decision; the greedy decision priced as the
 // greedy subtree of the node; and, one level deep, by the definition: C_T*SA(N) plus, per child, its
 // leaf cost or its cheapest split's local cost (whichever the greedy step takes), area-weighted.

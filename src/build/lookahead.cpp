@@ -78,6 +78,17 @@ LookaheadChoice Lookahead::choose(std::span<Reference> storage, uint32_t count, 
     if (must_split || split_pays)
         greedy = candidates.empty() ? median_split(references, summary) : candidates.front();
 
+    LookaheadChoice choice;
+    // Nothing to compare (one search space, or the others offer nothing here, and no leaf option):
+    // the greedy decision, unpriced. Pricing it would build its whole subtree for nothing.
+    const bool greedy_is_first_candidate = greedy && !candidates.empty();
+    const size_t alternatives = (greedy && !must_split ? 1 : 0) + candidates.size() - (greedy_is_first_candidate ? 1 : 0);
+    if (alternatives == 0) {
+        choice.split = greedy;
+        choice.options = 1;
+        return choice;
+    }
+
     // A candidate is priced on a copy of the node's storage, so each starts from the same references.
     std::vector<Reference> scratch(storage.size());
     auto evaluate = [&](const std::optional<Split>& option) {
@@ -87,7 +98,6 @@ LookaheadChoice Lookahead::choose(std::span<Reference> storage, uint32_t count, 
         return split_subtree_cost(scratch, count, *option, summary, node_depth, depth_ - 1);
     };
 
-    LookaheadChoice choice;
     auto consider = [&](const std::optional<Split>& option, bool is_greedy) {
         const double option_cost = evaluate(option);
         if (is_greedy) choice.greedy_cost = option_cost;
@@ -100,7 +110,6 @@ LookaheadChoice Lookahead::choose(std::span<Reference> storage, uint32_t count, 
     // The greedy decision first, so that ties keep it.
     consider(greedy, true);
     if (greedy && !must_split) consider(std::nullopt, false);
-    const bool greedy_is_first_candidate = greedy && !candidates.empty();
     for (size_t i = greedy_is_first_candidate ? 1 : 0; i < candidates.size(); ++i) consider(candidates[i], false);
     return choice;
 }

@@ -35,8 +35,9 @@ namespace spacebvh::build {
 
 struct LookaheadChoice {
     std::optional<Split> split;  // nothing: make the node a leaf
-    double cost = 0;             // the chosen option's evaluated cost (area-weighted, see above)
-    double greedy_cost = 0;      // the greedy decision's evaluated cost
+    double cost = 0;             // the chosen option's evaluated cost (area-weighted, see above); 0 when
+                                 // the greedy decision was the only option (options == 1: not priced)
+    double greedy_cost = 0;      // the greedy decision's evaluated cost (likewise)
     bool greedy = true;          // the choice is the greedy decision
     size_t options = 0;          // options evaluated (leaf and candidates)
 };
