@@ -146,11 +146,13 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     // few (on coffee_maker and living_room_3, the per-axis candidates cost 2.7-2.9x the time for the
     // same SAH to 0.1 %, bench/LOOKAHEAD_RESULTS.md).
     const Lookahead whole_subtree_lookahead(search, limits_.max_depth, 0, options_.cancel);
-    Impl impl{*this, search, lookahead, whole_subtree_lookahead, 0, std::move(references)};
-    impl.input_count = count;
     // With one search space there is no kind of split to choose between: the greedy step decides.
-    if (options_.lookahead_top_share > 0 && search_spaces_.size() > 1)
-        impl.top_node_references = std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))));
+    const size_t top_node_references =
+        options_.lookahead_top_share > 0 && search_spaces_.size() > 1
+            ? std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))))
+            : 0;
+    Impl impl{*this, search, lookahead, whole_subtree_lookahead, top_node_references, std::move(references)};
+    impl.input_count = count;
     impl.references.resize(capacity);
     impl.slots.resize(2 * capacity - 1);
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);
