@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -159,37 +160,70 @@ TEST(ObjectSweep, SplitDoesNotDependOnTheReferencesOrder) {
 }
 
 // The sweep's centroid sort (integer keys of 32 + B bits, radix passes from 256 references up) gives
-// the total CentroidOrder: after a sweep the references are a permutation of the input, sorted on the
-// last axis swept. Large primitive ids (B = 32), many equal centroids, and pieces of one triangle
-// (same primitive, different bounds, equal centroid on some axis) exercise the key's every part.
-TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
-    std::mt19937 random(5);
+// the total CentroidOrder: the same bytes as std::sort with CentroidOrder on every axis. Large
+// primitive ids (B = 32), many equal centroids, and pieces of one triangle (same primitive, different
+// bounds, equal centroid on some axis) exercise the key's every part.
+std::vector<Reference> references_with_equal_keys(size_t count, uint32_t seed) {
+    std::mt19937 random(seed);
     std::uniform_int_distribution<int> coarse(0, 15);
+    std::vector<Reference> references;
+    Vec3 lo;
+    for (size_t i = 0; i < count; ++i) {
+        // Three references per primitive: its box and two pieces sharing the box's centroid on x.
+        if (i % 3 == 0) lo = Vec3(float(coarse(random)), float(coarse(random)), float(coarse(random)));
+        const uint32_t primitive = 0xfffffff0u - uint32_t(i / 3) * 977u;
+        const float half = float(i % 3);
+        references.push_back(Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
+    }
+    std::shuffle(references.begin(), references.end(), random);
+    return references;
+}
+
+TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
     for (const size_t count : {size_t(40), size_t(200), size_t(3000)}) {
-        std::vector<Reference> references;
-        Vec3 lo;
-        for (size_t i = 0; i < count; ++i) {
-            // Three references per primitive: its box and two pieces sharing the box's centroid on x.
-            if (i % 3 == 0) lo = Vec3(float(coarse(random)), float(coarse(random)), float(coarse(random)));
-            const uint32_t primitive = 0xfffffff0u - uint32_t(i / 3) * 977u;
-            const float half = float(i % 3);
-            references.push_back(Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
+        const std::vector<Reference> input = references_with_equal_keys(count, 5);
+        for (int axis = 0; axis < 3; ++axis) {
+            std::vector<Reference> sorted = input, expected = input;
+            build::sort_in_centroid_order(sorted, axis);
+            std::sort(expected.begin(), expected.end(), build::CentroidOrder{axis});
+            for (size_t i = 0; i < count; ++i) {
+                ASSERT_EQ(sorted[i].primitive, expected[i].primitive) << count << " references, axis " << axis << ", " << i;
+                ASSERT_EQ(sorted[i].bounds, expected[i].bounds) << count << " references, axis " << axis << ", " << i;
+            }
         }
-        std::shuffle(references.begin(), references.end(), random);
-        std::vector<Reference> input = references;
+    }
+}
+
+// The sweep leaves the node's references as they are (it sorts copies), and given the driver's
+// centroid orders (NodeContext::sorted) it finds the same split as when it sorts them itself.
+TEST(ObjectSweep, ReadsTheNodeInPlaceOrFromTheDriversOrdersAlike) {
+    for (const size_t count : {size_t(40), size_t(3000)}) {
+        const std::vector<Reference> references = references_with_equal_keys(count, 9);
         const ReferenceSummary summary = build::summarize(references);
         const Split none;
-        build::ObjectSweepSplitFinder().find({references, summary, references.size(), summary.bounds.area(), none}, CostModel{});
-        int sorted_axes = 0;
-        for (int axis = 0; axis < 3; ++axis) sorted_axes += std::is_sorted(references.begin(), references.end(), build::CentroidOrder{axis});
-        EXPECT_GE(sorted_axes, 1) << count << " references";
-        std::sort(input.begin(), input.end(), build::CentroidOrder{0});
-        std::vector<Reference> output = references;
-        std::sort(output.begin(), output.end(), build::CentroidOrder{0});
-        for (size_t i = 0; i < count; ++i) {
-            EXPECT_EQ(output[i].primitive, input[i].primitive) << i;
-            EXPECT_EQ(output[i].bounds, input[i].bounds) << i;
+        CostModel cost;
+        cost.overlap_penalty = 1.0f;
+        const build::ObjectSweepSplitFinder sweep;
+        std::vector<Reference> node = references;
+        const Split alone = sweep.find({node, summary, count, summary.bounds.area(), none}, cost);
+        for (size_t i = 0; i < count; ++i) ASSERT_EQ(node[i].bounds, references[i].bounds) << "reordered at " << i;
+
+        std::array<std::vector<Reference>, 3> orders;
+        for (int axis = 0; axis < 3; ++axis) {
+            orders[axis] = references;
+            std::sort(orders[axis].begin(), orders[axis].end(), build::CentroidOrder{axis});
         }
+        build::NodeContext context{node, summary, count, summary.bounds.area(), none};
+        context.sorted = {orders[0], orders[1], orders[2]};
+        const Split presorted = sweep.find(context, cost);
+        ASSERT_TRUE(alone.is_valid());
+        EXPECT_EQ(presorted.cost, alone.cost);
+        EXPECT_EQ(presorted.axis, alone.axis);
+        EXPECT_EQ(presorted.left_count, alone.left_count);
+        EXPECT_EQ(presorted.left_bounds, alone.left_bounds);
+        EXPECT_EQ(presorted.right_bounds, alone.right_bounds);
+        EXPECT_EQ(presorted.tie.bounds, alone.tie.bounds);
+        EXPECT_EQ(presorted.tie.primitive, alone.tie.primitive);
     }
 }
 
@@ -506,6 +540,104 @@ TEST(Cancellation, FlagSetDuringTheBuildThrowsCancelled) {
     cancel = false;
     const Bvh bvh = build_bvh(scene, options);
     EXPECT_EQ(bvh.primitives.size(), scene.triangles.size());
+}
+
+}  // namespace spacebvh
+
+namespace spacebvh {
+namespace {
+
+// A tree as a depth-first list (left first) of node boxes, each leaf followed by its triangles.
+struct TreeListing {
+    std::vector<AABB> boxes;
+    std::vector<std::vector<uint32_t>> leaves;
+    bool operator==(const TreeListing&) const = default;
+};
+
+void list_greedy_tree(const build::SplitSearch& search, std::span<Reference> storage, uint32_t count,
+                      const ReferenceSummary& summary, uint32_t depth, TreeListing& listing, std::array<size_t, 3>& kinds) {
+    listing.boxes.push_back(summary.bounds);
+    auto leaf = [&] {
+        std::vector<uint32_t> triangles;
+        for (const Reference& reference : storage.first(count)) triangles.push_back(reference.primitive);
+        std::sort(triangles.begin(), triangles.end());
+        triangles.erase(std::unique(triangles.begin(), triangles.end()), triangles.end());
+        listing.leaves.push_back(triangles);
+    };
+    if (search.must_be_leaf(count, depth)) return leaf();
+    std::optional<Split> split = search.greedy_decision(storage.first(count), summary, storage.size());
+    if (!split) return leaf();
+    search.order_for_apply(storage.first(count));
+    const std::optional<build::ChildRanges> children = search.apply(storage, count, *split, summary);
+    if (!children) return leaf();
+    kinds[split->kind == build::SplitKind::spatial ? 2 : split->kind == build::SplitKind::object_binned ? 1 : 0]++;
+    const std::span<Reference> left = storage.first(children->left_capacity);
+    const std::span<Reference> right = storage.subspan(children->left_capacity, children->right_capacity);
+    list_greedy_tree(search, left, children->left_count, build::summarize(left.first(children->left_count)), depth + 1,
+                     listing, kinds);
+    list_greedy_tree(search, right, children->right_count, build::summarize(right.first(children->right_count)),
+                     depth + 1, listing, kinds);
+}
+
+void list_bvh(const Bvh& bvh, uint32_t index, TreeListing& listing) {
+    const BvhNode& node = bvh.nodes[index];
+    listing.boxes.push_back(node.bounds);
+    if (node.is_leaf()) {
+        listing.leaves.emplace_back(bvh.primitives.begin() + node.first,
+                                    bvh.primitives.begin() + node.first + node.reference_count);
+        return;
+    }
+    list_bvh(bvh, node.first, listing);
+    list_bvh(bvh, node.first + 1, listing);
+}
+
+}  // namespace
+
+// The driver keeps every node's references in centroid order on each axis, so that no node sorts:
+// children inherit the orders through object splits, and a spatial split merges its straddlers'
+// new pieces in. Its trees are those of the plain greedy step that sorts every node itself, also
+// where the reference budget runs out (which straddlers are still duplicated depends on the order
+// splits are applied in: SplitSearch::order_for_apply).
+TEST(TopDownBuilder, CentroidOrdersGiveTheTreesOfTheGreedyStepThatSortsItself) {
+    CostModel cost;
+    cost.overlap_penalty = 1.0f;
+    const build::BuildLimits limits;
+    std::array<size_t, 3> kinds{};  // splits taken: sweep, binned object, spatial
+    size_t checked = 0;
+    for (TestNode& node : test_nodes()) {
+        const uint32_t count = uint32_t(node.references.size());
+        if (count < 40) continue;
+        // The binned object space first too: its splits then win ties with the sweep's, so both
+        // kinds of object split occur.
+        for (const bool binned_first : {false, true}) {
+            auto search_spaces = [&] {
+                auto spaces = every_search_space(*node.scene);
+                if (binned_first) std::swap(spaces[0], spaces[1]);
+                return spaces;
+            };
+            for (const uint32_t capacity : {count, count + count / 50, 2 * count}) {
+                SCOPED_TRACE(std::to_string(count) + " references, capacity " + std::to_string(capacity) +
+                             (binned_first ? ", binned first" : ""));
+                const ReferenceSummary summary = build::summarize(node.references);
+                const auto spaces = search_spaces();
+                const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+                ASSERT_TRUE(search.reads_centroid_orders());
+                std::vector<Reference> storage = node.references;
+                storage.resize(capacity);
+                TreeListing expected, built;
+                list_greedy_tree(search, storage, count, summary, 0, expected, kinds);
+                build::TopDownBuilder builder(cost, limits, search_spaces(), node.scene->triangles, {});
+                list_bvh(builder.build(node.references, capacity), 0, built);
+                EXPECT_EQ(built.boxes.size(), expected.boxes.size());
+                EXPECT_TRUE(built == expected);
+                ++checked;
+            }
+        }
+    }
+    EXPECT_EQ(checked, 36u);
+    EXPECT_GT(kinds[0], 100u) << "sweep splits";
+    EXPECT_GT(kinds[1], 100u) << "binned object splits";
+    EXPECT_GT(kinds[2], 20u) << "spatial splits";
 }
 
 }  // namespace spacebvh

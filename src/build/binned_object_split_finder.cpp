@@ -103,7 +103,7 @@ struct BinGrid {
 // (CheapestSplit or SplitCandidates).
 template <typename Sink>
 void bin_and_sweep(const NodeContext& context, const CostModel& cost, uint32_t max_bins, Sink& sink) {
-    const std::span<Reference> references = context.references;
+    const std::span<const Reference> references = context.references;
     const ReferenceSummary& node = context.summary;
     if (references.size() < 2) return;
 

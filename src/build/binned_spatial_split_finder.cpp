@@ -165,7 +165,7 @@ struct SpatialBins {
 template <typename Sink>
 void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<const Triangle> triangles,
                    const SpatialSearchOptions& options, Sink& sink) {
-    const std::span<Reference> references = context.references;
+    const std::span<const Reference> references = context.references;
     if (references.size() < 2) return;
     if (spatial_search_gated_off(context, cost, options.gate_alpha)) return;
     const AABB& node = context.summary.bounds;

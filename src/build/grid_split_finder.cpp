@@ -310,7 +310,7 @@ std::pair<Reference, Reference> place_in_grid_children(const Reference& referenc
 
 Split GridSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
     Split best;
-    const std::span<Reference> references = context.references;
+    const std::span<const Reference> references = context.references;
     const uint32_t count = uint32_t(references.size());
     if (count < 2) return best;
     const AABB& node = context.summary.bounds;

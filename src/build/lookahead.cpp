@@ -38,6 +38,7 @@ double Lookahead::greedy_subtree_cost(std::span<Reference> storage, uint32_t cou
 double Lookahead::split_subtree_cost(std::span<Reference> storage, uint32_t count, Split split,
                                      const ReferenceSummary& summary, uint32_t node_depth, uint32_t child_levels) const {
     const CostModel& cost = search_.cost();
+    search_.order_for_apply(storage.first(count));
     const std::optional<ChildRanges> children = search_.apply(storage, count, split, summary);
     if (!children) return area_weighted(cost.leaf_cost(count), summary);  // the driver makes a leaf then
 

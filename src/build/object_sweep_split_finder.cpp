@@ -49,11 +49,14 @@ void radix_sort(std::vector<KeyedReference>& items, int key_bits) {
 // axis-aligned plane; 82 % of those sorted in a crytek_sponza build). Only references equal on both
 // (pieces of one triangle with the same centroid) are compared by CentroidOrder itself, so the order
 // is the same total order. Measured in bench/RESULTS.md ("Issue #3, session 14").
-void sort_by_centroid(std::span<Reference> references, int axis) {
+}  // namespace
+
+void sort_in_centroid_order(std::span<const Reference> references, int axis, std::vector<Reference>& sorted) {
     const size_t count = references.size();
     const CentroidOrder order{axis};
     if (count <= 64) {
-        std::sort(references.begin(), references.end(), order);
+        sorted.assign(references.begin(), references.end());
+        std::sort(sorted.begin(), sorted.end(), order);
         return;
     }
     uint32_t largest_primitive = 0;
@@ -80,10 +83,17 @@ void sort_by_centroid(std::span<Reference> references, int axis) {
             });
         begin = end;
     }
-    std::vector<Reference> sorted(count);
+    sorted.resize(count);
     for (size_t i = 0; i < count; ++i) sorted[i] = references[keyed[i].index];
+}
+
+void sort_in_centroid_order(std::span<Reference> references, int axis) {
+    std::vector<Reference> sorted;
+    sort_in_centroid_order(references, axis, sorted);
     std::copy(sorted.begin(), sorted.end(), references.begin());
 }
+
+namespace {
 
 // The axes a node can be cut on (its centroids not all equal there), in the order to sweep them:
 // first one on which its references are already sorted, then the others. A child of a sweep split
@@ -96,12 +106,13 @@ struct SweepOrder {
     int count = 0;
     bool first_sorted = false;  // axes[0] needs no sort
 };
-SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSummary& node) {
+// With the driver's orders (`presorted`) every axis is sorted already and nothing is checked.
+SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSummary& node, bool presorted) {
     SweepOrder order;
     for (int axis = 0; axis < 3; ++axis) {
         if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
         order.axes[order.count++] = axis;
-        if (!order.first_sorted && std::is_sorted(references.begin(), references.end(), CentroidOrder{axis})) {
+        if (!presorted && !order.first_sorted && std::is_sorted(references.begin(), references.end(), CentroidOrder{axis})) {
             order.first_sorted = true;
             std::rotate(order.axes.begin(), order.axes.begin() + order.count - 1, order.axes.begin() + order.count);
         }
@@ -115,7 +126,7 @@ SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSum
 // and boxes are made only for the cuts offered to the sink. crytek_sponza cbvh: see bench/RESULTS.md.
 template <typename Sink>
 void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
-    const std::span<Reference> references = context.references;
+    const std::span<const Reference> references = context.references;
     const ReferenceSummary& node = context.summary;
     const size_t count = references.size();
     if (count < 2) return;
@@ -125,21 +136,29 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     // Right-to-left suffix boxes and their areas; reused across axes.
     std::vector<SimdBox> suffix_bounds(count);
     std::vector<float> suffix_area(count);
-    const SweepOrder order = sweep_order(references, node);
+    const bool presorted = std::ranges::all_of(context.sorted, [&](auto sorted) { return sorted.size() == count; });
+    const SweepOrder order = sweep_order(references, node, presorted);
+    std::vector<Reference> scratch;  // a sorted copy: the node's references keep their order
     for (int k = 0; k < order.count; ++k) {
         const int axis = order.axes[k];
-        // The order is total, so the sort gives one answer.
-        if (k > 0 || !order.first_sorted) sort_by_centroid(references, axis);
+        // The order is total, so the sort gives one answer: the driver's sorted copy, or this one.
+        std::span<const Reference> sorted = references;
+        if (presorted) {
+            sorted = context.sorted[axis];
+        } else if (k > 0 || !order.first_sorted) {
+            sort_in_centroid_order(references, axis, scratch);
+            sorted = scratch;
+        }
 
         SimdBox right;
         for (size_t i = count; i-- > 1;) {
-            right.extend_as_aabb(references[i].bounds);
+            right.extend_as_aabb(sorted[i].bounds);
             suffix_bounds[i] = right;
             suffix_area[i] = right.area();
         }
         SimdBox left;
         for (size_t i = 1; i < count; ++i) {
-            left.extend_as_aabb(references[i - 1].bounds);
+            left.extend_as_aabb(sorted[i - 1].bounds);
             // As CostModel::split_cost prices the cut.
             const float overlap_factor = penalised ? cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i])) : 1.0f;
             if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
@@ -147,7 +166,7 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
             if (split_cost < sink.threshold(axis)) {
                 Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),
                                          suffix_bounds[i].aabb(), uint32_t(count - i));
-                split.tie = references[i];
+                split.tie = sorted[i];
                 sink.offer(split);
             }
         }

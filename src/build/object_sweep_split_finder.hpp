@@ -11,6 +11,8 @@ public:
     const char* name() const override { return "object-sweep"; }
     Split find(const NodeContext& node, const CostModel& cost) const override;
     std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t per_axis) const override;
+    // Given NodeContext::sorted, the sweep reads the driver's orders and sorts nothing.
+    bool reads_centroid_orders() const override { return true; }
 };
 
 // Orders references by centroid[axis], then primitive, then bounds: a total order on the whole
@@ -29,5 +31,8 @@ struct CentroidOrder {
         return false;
     }
 };
+
+// Sorts the references by CentroidOrder{axis} (the sweep's sort; radix sort on integer keys).
+void sort_in_centroid_order(std::span<Reference> references, int axis);
 
 }  // namespace spacebvh::build

@@ -33,6 +33,21 @@ bool goes_left(const Reference& reference, const Split& split) {
 
 namespace {
 
+// Moves the references for which goes_left holds to the front, both sides in their order; returns
+// how many went left. `expected_right`: a size hint for the buffer.
+template <class GoesLeft>
+uint32_t partition_in_order(std::span<Reference> references, uint32_t expected_right, GoesLeft goes_left) {
+    std::vector<Reference> right;
+    right.reserve(expected_right);
+    auto left_end = references.begin();
+    for (const Reference& reference : references) {
+        if (goes_left(reference)) *left_end++ = reference;
+        else right.push_back(reference);
+    }
+    std::copy(right.begin(), right.end(), left_end);
+    return uint32_t(left_end - references.begin());
+}
+
 ChildRanges share_capacity(uint32_t capacity, uint32_t left_count, uint32_t right_count) {
     const uint64_t spare = capacity - left_count - right_count;
     const uint32_t left_extra = uint32_t(spare * left_count / (uint64_t(left_count) + right_count));
@@ -77,20 +92,18 @@ Placement cheapest_placement(const PlacementCosts& costs) {
 
 ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, const Split& split,
                                 std::span<const Triangle> triangles) {
-    std::vector<Reference> left, right;
+    std::vector<Reference> left, right, left_from_straddlers, right_from_straddlers;
     left.reserve(split.left_count);
     right.reserve(split.right_count);
     // Every reference clipped into both sides costs one more slot of this subtree's capacity.
     size_t duplicates_left = storage.size() - count;
     for (uint32_t i = 0; i < count; ++i) {
         const Reference& reference = storage[i];
-        const float lo = reference.bounds.lo[split.axis], hi = reference.bounds.hi[split.axis];
-        if (hi <= split.position && lo < split.position) {
+        const PlaneSide side = plane_side(reference, split.axis, split.position);
+        if (side == PlaneSide::left) {
             left.push_back(reference);
-        } else if (lo >= split.position && hi > split.position) {
+        } else if (side == PlaneSide::right) {
             right.push_back(reference);
-        } else if (lo == hi) {
-            left.push_back(reference);  // flat in the plane itself: one side is enough
         } else {
             const PlacementCosts costs = placement_costs(split, reference.bounds);
             Placement placement = split.unsplit ? cheapest_placement(costs) : Placement::both;
@@ -99,22 +112,27 @@ ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, co
                 auto [left_piece, right_piece] = split_reference(reference, triangles[reference.primitive], split.axis, split.position);
                 const bool has_left = !left_piece.bounds.is_empty(), has_right = !right_piece.bounds.is_empty();
                 if (has_left && has_right) {
-                    left.push_back(left_piece);
-                    right.push_back(right_piece);
+                    left_from_straddlers.push_back(left_piece);
+                    right_from_straddlers.push_back(right_piece);
                     --duplicates_left;
                 } else if (has_left) {
-                    left.push_back(left_piece);
+                    left_from_straddlers.push_back(left_piece);
                 } else if (has_right) {
-                    right.push_back(right_piece);
+                    right_from_straddlers.push_back(right_piece);
                 } else {
-                    left.push_back(reference);  // clipping found nothing (rounding): keep it whole
+                    left_from_straddlers.push_back(reference);  // clipping found nothing (rounding): keep it whole
                 }
             } else {
-                (placement == Placement::left ? left : right).push_back(reference);
+                (placement == Placement::left ? left_from_straddlers : right_from_straddlers).push_back(reference);
             }
         }
     }
-    return store_children(storage, left, right);
+    left.insert(left.end(), left_from_straddlers.begin(), left_from_straddlers.end());
+    right.insert(right.end(), right_from_straddlers.begin(), right_from_straddlers.end());
+    ChildRanges ranges = store_children(storage, left, right);
+    ranges.left_from_straddlers = uint32_t(left_from_straddlers.size());
+    ranges.right_from_straddlers = uint32_t(right_from_straddlers.size());
+    return ranges;
 }
 
 // The finder's own assignment (place_in_grid_children), so the children get exactly the references
@@ -140,33 +158,27 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
                         std::span<const Triangle> triangles) {
     if (split.kind == SplitKind::spatial) return apply_spatial_split(storage, count, split, triangles);
     if (split.kind == SplitKind::grid) return apply_grid_split(storage, count, split, triangles);
-    auto middle = storage.begin();
+    // In order (a stable partition): the children keep the node's order, so the driver's centroid
+    // orders stay sorted (top_down_builder.cpp) and, without them, children inherit the order of
+    // the last axis the sweep sorted, which saves one of their sorts (object_sweep_split_finder.cpp).
+    uint32_t left_count = 0;
     if (split.kind == SplitKind::object_binned) {
         // The common case of the binned builders, without goes_left's dispatch per reference.
         const ObjectBinning binning = split.binning;
         const int axis = split.axis;
         const uint32_t bin = split.bin;
-        middle = std::partition(storage.begin(), storage.begin() + count,
-                                [&](const Reference& reference) { return left_of_bin(reference, binning, axis, bin); });
+        left_count = partition_in_order(storage.first(count), split.right_count, [&](const Reference& reference) {
+            return left_of_bin(reference, binning, axis, bin);
+        });
     } else if (split.kind == SplitKind::object_sorted) {
-        // In order: the sweep left the references sorted on the last axis it swept, and children that
-        // keep that order skip one of their three sorts (object_sweep_split_finder.cpp, sweep_order).
         const CentroidOrder before{split.axis};
         const Reference tie = split.tie;
-        std::vector<Reference> right;
-        right.reserve(split.right_count);
-        auto left_end = storage.begin();
-        for (auto reference = storage.begin(); reference != storage.begin() + count; ++reference) {
-            if (before(*reference, tie)) *left_end++ = *reference;
-            else right.push_back(*reference);
-        }
-        std::copy(right.begin(), right.end(), left_end);
-        middle = left_end;
+        left_count = partition_in_order(storage.first(count), split.right_count,
+                                        [&](const Reference& reference) { return before(reference, tie); });
     } else {
-        middle = std::partition(storage.begin(), storage.begin() + count,
-                                [&](const Reference& reference) { return goes_left(reference, split); });
+        left_count = partition_in_order(storage.first(count), split.right_count,
+                                        [&](const Reference& reference) { return goes_left(reference, split); });
     }
-    const uint32_t left_count = uint32_t(middle - storage.begin());
     const ChildRanges ranges = share_capacity(uint32_t(storage.size()), left_count, count - left_count);
     // The right block moves up to where the right child's capacity starts (never down); without spare
     // capacity (no spatial splits) it is already there.
@@ -176,13 +188,16 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
     return ranges;
 }
 
-Split median_split(std::span<Reference> references, const ReferenceSummary& node) {
+Split median_split(std::span<const Reference> references, const ReferenceSummary& node) {
     Split split;
     split.kind = SplitKind::object_sorted;
     split.axis = node.centroid_bounds.largest_axis();
     const size_t half = references.size() / 2;
-    std::nth_element(references.begin(), references.begin() + half, references.end(), CentroidOrder{split.axis});
-    split.tie = references[half];
+    // On a copy: the node's references keep their order (the driver's centroid orders). The order is
+    // total, so the median is one reference whatever the input order.
+    std::vector<Reference> copy(references.begin(), references.end());
+    std::nth_element(copy.begin(), copy.begin() + half, copy.end(), CentroidOrder{split.axis});
+    split.tie = copy[half];
     split.left_count = uint32_t(half);
     split.right_count = uint32_t(references.size() - half);
     return split;

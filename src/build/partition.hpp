@@ -15,9 +15,26 @@ namespace spacebvh::build {
 struct ChildRanges {
     uint32_t left_count = 0, left_capacity = 0;
     uint32_t right_count = 0, right_capacity = 0;
+    // Spatial splits: the last this many references of each child came from references that
+    // straddled the plane (clipped pieces, or whole ones placed on one side); the others are the
+    // node's references that lay on that side, in the node's order.
+    uint32_t left_from_straddlers = 0, right_from_straddlers = 0;
 };
 
-// Deterministic: the same input order gives the same output order.
+// Where a reference lies against the plane x[axis] = position, as a spatial split sends it: wholly
+// left (a reference flat in the plane included), wholly right, or straddling (clipped into both, or
+// placed on one side by unsplitting or the reference budget).
+enum class PlaneSide { left, right, straddles };
+inline PlaneSide plane_side(const Reference& reference, int axis, float position) {
+    const float lo = reference.bounds.lo[axis], hi = reference.bounds.hi[axis];
+    if (hi <= position && lo < position) return PlaneSide::left;
+    if (lo >= position && hi > position) return PlaneSide::right;
+    if (lo == hi) return PlaneSide::left;  // flat in the plane itself: one side is enough
+    return PlaneSide::straddles;
+}
+
+// Deterministic: the same input order gives the same output order. Object splits keep the order
+// (each child's references in the node's order).
 ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Split& split,
                         std::span<const Triangle> triangles);
 
@@ -25,6 +42,6 @@ bool goes_left(const Reference& reference, const Split& split);  // object split
 
 // The fallback when a node must be split (too many references) but no search space offers a
 // feasible split: halve the node at the median of the centroid order on the widest axis.
-Split median_split(std::span<Reference> references, const ReferenceSummary& node);
+Split median_split(std::span<const Reference> references, const ReferenceSummary& node);
 
 }  // namespace spacebvh::build

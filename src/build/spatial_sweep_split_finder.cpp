@@ -7,6 +7,7 @@
 #include <numeric>
 #include <vector>
 
+#include "build/partition.hpp"
 #include "build/spatial_split.hpp"
 
 namespace spacebvh::build {
@@ -15,13 +16,12 @@ SpatialPlaneEvaluation evaluate_spatial_plane(std::span<const Reference> referen
                                               std::span<const Triangle> triangles, int axis, float position) {
     SpatialPlaneEvaluation result;
     for (const Reference& reference : references) {
-        const float lo = reference.bounds.lo[axis], hi = reference.bounds.hi[axis];
         // The classification of apply_spatial_split (without unsplitting).
-        const bool right_only = lo >= position && hi > position;
-        if (!right_only && ((hi <= position && lo < position) || lo == hi)) {  // lo == hi: flat in the plane
+        const PlaneSide side = plane_side(reference, axis, position);
+        if (side == PlaneSide::left) {
             result.left_bounds.extend(reference.bounds);
             ++result.left_count;
-        } else if (right_only) {
+        } else if (side == PlaneSide::right) {
             result.right_bounds.extend(reference.bounds);
             ++result.right_count;
         } else {
@@ -213,7 +213,7 @@ SpatialSweepPlanes sweep_spatial_planes(std::span<const Reference> references, s
 
 Split SpatialSweepSplitFinder::find(const NodeContext& context, const CostModel& cost) const {
     Split best;
-    const std::span<Reference> references = context.references;
+    const std::span<const Reference> references = context.references;
     if (references.size() < 2 || spatial_search_gated_off(context, cost, options_.gate_alpha)) return best;
     const AABB& node = context.summary.bounds;
     std::array<SpatialSweepPlanes, 3> sweeps;

@@ -77,14 +77,20 @@ inline Split make_split(SplitKind kind, float cost, int axis, const AABB& left_b
     return split;
 }
 
+// A node's references three times, each sorted by CentroidOrder on one axis (x, y, z), kept by the
+// driver for the object sweep so that no node sorts (children inherit their parent's orders).
+// Empty spans: not kept (the sweep sorts the node's references itself).
+using CentroidOrders = std::array<std::span<const Reference>, 3>;
+
 // What a search space sees of a node.
 struct NodeContext {
-    std::span<Reference> references;
+    std::span<const Reference> references;
     const ReferenceSummary& summary;
     size_t capacity;   // references this node's subtree may hold (its share of the reference budget)
     float root_area;   // SA(root), for gates relative to the scene
     const Split& best_so_far;  // the cheapest split of the search spaces evaluated before this one
     bool must_split = false;   // too many references for a leaf: split even if no split pays
+    CentroidOrders sorted{};   // the references in centroid order per axis, when the driver keeps them
 };
 
 // Where a finder's evaluation loop puts the configurations it evaluates. A finder offers a split
@@ -128,14 +134,16 @@ private:
     std::array<std::vector<Split>, 3> axes_;
 };
 
-// A search space: finds the lowest-cost configuration of its kind for a node. Finders may reorder
-// the node's references (e.g. sort them) but must not change them. They must be deterministic:
-// the same references in the same order give the same split, whatever the thread count.
+// A search space: finds the lowest-cost configuration of its kind for a node. Finders read the
+// node's references (sorting copies where they need an order) and must be deterministic: the same
+// references give the same split, whatever the thread count.
 class SplitFinder {
 public:
     virtual ~SplitFinder() = default;
     virtual const char* name() const = 0;
     virtual Split find(const NodeContext& node, const CostModel& cost) const = 0;
+    // Whether the search space reads NodeContext::sorted (the driver keeps the orders only then).
+    virtual bool reads_centroid_orders() const { return false; }
     // The `per_axis` cheapest configurations on each axis, axis by axis and cheapest first; the first
     // cheapest of them is find()'s split. A search space without several candidates offers find()'s.
     virtual std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t /*per_axis*/) const {

@@ -1,13 +1,16 @@
 #include "build/split_search.hpp"
 
+#include "build/object_sweep_split_finder.hpp"
+
 #include <algorithm>
 
 namespace spacebvh::build {
 
-Split SplitSearch::cheapest(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity) const {
+Split SplitSearch::cheapest(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
+                           const CentroidOrders& sorted) const {
     Split best;
     for (const auto& search_space : search_spaces_) {
-        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size())};
+        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size()), sorted};
         Split candidate = search_space->find(context, cost_);
         if (candidate.cost < best.cost) best = candidate;
     }
@@ -15,7 +18,7 @@ Split SplitSearch::cheapest(std::span<Reference> references, const ReferenceSumm
 }
 
 template <class Offers>
-std::vector<Split> SplitSearch::collect(std::span<Reference> references, const ReferenceSummary& summary,
+std::vector<Split> SplitSearch::collect(std::span<const Reference> references, const ReferenceSummary& summary,
                                         size_t capacity, Offers&& offers) const {
     // The same walk as cheapest(): each space sees the cheapest split of the spaces before it (the
     // spatial gate reads it), and the first cheapest offer, cheapest()'s split, is moved to the front.
@@ -36,14 +39,14 @@ std::vector<Split> SplitSearch::collect(std::span<Reference> references, const R
     return all;
 }
 
-std::vector<Split> SplitSearch::candidates(std::span<Reference> references, const ReferenceSummary& summary,
+std::vector<Split> SplitSearch::candidates(std::span<const Reference> references, const ReferenceSummary& summary,
                                            size_t capacity, uint32_t per_axis) const {
     return collect(references, summary, capacity, [&](const SplitFinder& space, const NodeContext& context) {
         return space.find_candidates(context, cost_, per_axis);
     });
 }
 
-std::vector<Split> SplitSearch::cheapest_per_space(std::span<Reference> references, const ReferenceSummary& summary,
+std::vector<Split> SplitSearch::cheapest_per_space(std::span<const Reference> references, const ReferenceSummary& summary,
                                                    size_t capacity) const {
     return collect(references, summary, capacity, [&](const SplitFinder& space, const NodeContext& context) {
         const Split split = space.find(context, cost_);
@@ -51,14 +54,19 @@ std::vector<Split> SplitSearch::cheapest_per_space(std::span<Reference> referenc
     });
 }
 
-std::optional<Split> SplitSearch::greedy_decision(std::span<Reference> references, const ReferenceSummary& summary,
-                                                  size_t capacity) const {
+std::optional<Split> SplitSearch::greedy_decision(std::span<const Reference> references, const ReferenceSummary& summary,
+                                                  size_t capacity, const CentroidOrders& sorted) const {
     const size_t count = references.size();
-    const Split split = cheapest(references, summary, capacity);
+    const Split split = cheapest(references, summary, capacity, sorted);
     const bool split_pays = split.is_valid() && split.cost < cost_.leaf_cost(count);
     if (!must_split(count) && !split_pays) return std::nullopt;
     if (!split.is_valid()) return median_split(references, summary);
     return split;
+}
+
+void SplitSearch::order_for_apply(std::span<Reference> references) const {
+    if (!reads_centroid_orders() || std::is_sorted(references.begin(), references.end(), CentroidOrder{0})) return;
+    sort_in_centroid_order(references, 0);
 }
 
 std::optional<ChildRanges> SplitSearch::apply(std::span<Reference> storage, uint32_t count, Split& split,

@@ -5,6 +5,7 @@
 // recursive cost evaluation (lookahead) takes it below a node to price the node's candidates.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <span>
@@ -35,25 +36,37 @@ public:
     // Nodes that are split even when no split pays.
     bool must_split(size_t count) const { return count > limits_.max_leaf_size; }
 
-    // The cheapest split over all search spaces (invalid when none is feasible). May reorder the
-    // references, as the finders do.
-    Split cheapest(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity) const;
+    // The cheapest split over all search spaces (invalid when none is feasible). `sorted`: the
+    // driver's centroid orders of the references, when it keeps them.
+    Split cheapest(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
+                   const CentroidOrders& sorted = {}) const;
+
+    // Whether a search space reads the references in centroid order per axis (NodeContext::sorted),
+    // so the driver should keep them.
+    bool reads_centroid_orders() const {
+        return std::ranges::any_of(search_spaces_, [](const auto& space) { return space->reads_centroid_orders(); });
+    }
+
+    // Puts a node's references in the order the driver applies splits to: CentroidOrder{x} when it
+    // keeps centroid orders (`references` is its x order then), else as they are. Which straddlers
+    // a spatial split still duplicates once the reference budget runs out depends on the order, so
+    // the lookahead prices its candidates on this order to build the driver's trees.
+    void order_for_apply(std::span<Reference> references) const;
 
     // Every search space's `per_axis` cheapest splits on each axis (SplitFinder::find_candidates),
-    // with cheapest()'s split first. May reorder the references.
-    std::vector<Split> candidates(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity,
+    // with cheapest()'s split first.
+    std::vector<Split> candidates(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
                                   uint32_t per_axis) const;
 
-    // Each search space's cheapest split (the invalid ones left out), cheapest()'s split first. May
-    // reorder the references.
-    std::vector<Split> cheapest_per_space(std::span<Reference> references, const ReferenceSummary& summary,
+    // Each search space's cheapest split (the invalid ones left out), cheapest()'s split first.
+    std::vector<Split> cheapest_per_space(std::span<const Reference> references, const ReferenceSummary& summary,
                                           size_t capacity) const;
 
     // The greedy decision for a node that may be split (!must_be_leaf): nothing when it should be a
     // leaf (no split beats C_I*|N| and the node may be a leaf); else the cheapest split, or the
     // median split when the node must be split and no search space offers a feasible one.
-    std::optional<Split> greedy_decision(std::span<Reference> references, const ReferenceSummary& summary,
-                                         size_t capacity) const;
+    std::optional<Split> greedy_decision(std::span<const Reference> references, const ReferenceSummary& summary,
+                                         size_t capacity, const CentroidOrders& sorted = {}) const;
 
     // Applies `split` to the node's references storage[0, count) (see ChildRanges). When a side comes
     // out empty (never for the finders' own splits; a guard against float surprises) the median split
@@ -64,7 +77,7 @@ public:
 private:
     // The splits `offers(space, context)` gives for each search space in turn, cheapest() first.
     template <class Offers>
-    std::vector<Split> collect(std::span<Reference> references, const ReferenceSummary& summary, size_t capacity,
+    std::vector<Split> collect(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
                                Offers&& offers) const;
 
     CostModel cost_;

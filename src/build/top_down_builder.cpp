@@ -1,5 +1,6 @@
 #include "build/top_down_builder.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <cmath>
 
 #include "build/lookahead.hpp"
+#include "build/object_sweep_split_finder.hpp"
 #include "build/partition.hpp"
 #include "spacebvh/error.hpp"
 
@@ -33,6 +35,12 @@ struct TopDownBuilder::Impl {
     const Lookahead& whole_subtree_lookahead;  // for nodes of at least `top_node_references`
     size_t top_node_references = 0;            // 0: no node looks ahead to the leaves
     std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
+    // Centroid orders for the object sweep, kept when a search space reads them: then every node's
+    // references are in CentroidOrder{x} in `references`, and the same references are in
+    // CentroidOrder{y} and {z} at the same places in these two copies, so that no node sorts
+    // (crytek_sponza: bench/RESULTS.md, "Spatial build time").
+    bool keeps_orders = false;
+    std::array<std::vector<Reference>, 2> other_orders;
     size_t input_count = 0;
     std::vector<SlotNode> slots{};
     std::atomic<size_t> references_in_leaves{0};
@@ -69,11 +77,13 @@ struct TopDownBuilder::Impl {
         else if (builder.options_.lookahead_depth > 0)
             split = lookahead.choose(storage, count, summary, depth).split;
         else
-            split = search.greedy_decision(storage.first(count), summary, capacity);
+            split = search.greedy_decision(storage.first(count), summary, capacity, centroid_orders(begin, count));
         if (!split) return make_leaf(node);
+        const SplitKind kind = split->kind;  // apply may fall back to the median split
         const std::optional<ChildRanges> applied = search.apply(storage, count, *split, summary);
         if (!applied) return make_leaf(node);
         const ChildRanges& children = *applied;
+        if (keeps_orders) carry_orders(begin, count, capacity, kind, *split, children);
         const uint32_t right_begin = begin + children.left_capacity;
         const ReferenceSummary left_summary = summarize({references.data() + begin, children.left_count});
         const ReferenceSummary right_summary = summarize({references.data() + right_begin, children.right_count});
@@ -93,6 +103,101 @@ struct TopDownBuilder::Impl {
             build_left();
             build_right();
         }
+    }
+
+    CentroidOrders centroid_orders(uint32_t begin, uint32_t count) const {
+        if (!keeps_orders) return {};
+        return {std::span<const Reference>(references.data() + begin, count),
+                std::span<const Reference>(other_orders[0].data() + begin, count),
+                std::span<const Reference>(other_orders[1].data() + begin, count)};
+    }
+
+    Reference* order_data(int axis) { return axis == 0 ? references.data() : other_orders[axis - 1].data(); }
+
+    // Runs job(axis) for the three orders (0 = x, `references`; 1 = y, 2 = z), in parallel for big nodes.
+    template <class Job>
+    static void for_each_order(uint32_t count, Job&& job) {
+        if (count >= kParallelSubtreeThreshold) tbb::parallel_for(0, 3, job);
+        else for (int axis = 0; axis < 3; ++axis) job(axis);
+    }
+
+    // The children's orders, once apply_split has put the children in `references` (`kind`: the
+    // split chosen; apply may have fallen back to the median split, then split.kind differs).
+    void carry_orders(uint32_t begin, uint32_t count, uint32_t capacity, SplitKind kind, const Split& split,
+                      const ChildRanges& children) {
+        const bool object_split = kind == SplitKind::object_sorted || kind == SplitKind::object_binned;
+        if (object_split && split.kind == kind) return split_orders_alike(begin, count, capacity, split, children);
+        if (kind == SplitKind::spatial && split.kind == kind) return merge_pieces_into_orders(begin, count, split, children);
+        sort_orders_again(begin, children);
+    }
+
+    // An object split sends each reference to the same side whatever the order, and apply_split keeps
+    // the order: the y and z copies are split alike.
+    void split_orders_alike(uint32_t begin, uint32_t count, uint32_t capacity, const Split& split,
+                            const ChildRanges& children) {
+        auto split_copy = [&](int k) {
+            const ChildRanges same = apply_split({other_orders[k].data() + begin, capacity}, count, split, builder.triangles_);
+            if (same.left_count != children.left_count || same.left_capacity != children.left_capacity)
+                throw Error("internal: the centroid orders split differently");
+        };
+        if (count >= kParallelSubtreeThreshold) {
+            tbb::parallel_invoke([&] { split_copy(0); }, [&] { split_copy(1); });
+        } else {
+            split_copy(0);
+            split_copy(1);
+        }
+    }
+
+    // A spatial split keeps the references lying on one side (first in each child, in the node's
+    // order) and makes new pieces from the straddlers (last in each child). Each of a child's orders
+    // is the node's same order filtered to the side, merged with the pieces sorted on their own:
+    // linear but for the few pieces.
+    void merge_pieces_into_orders(uint32_t begin, uint32_t count, const Split& split, const ChildRanges& children) {
+        const uint32_t firsts[2] = {begin, begin + children.left_capacity};
+        const uint32_t counts[2] = {children.left_count, children.right_count};
+        const uint32_t kept_counts[2] = {children.left_count - children.left_from_straddlers,
+                                         children.right_count - children.right_from_straddlers};
+        std::array<std::vector<Reference>, 2> pieces;
+        for (int child = 0; child < 2; ++child)
+            pieces[child].assign(references.data() + firsts[child] + kept_counts[child],
+                                 references.data() + firsts[child] + counts[child]);
+        for_each_order(count, [&](int axis) {
+            Reference* order = order_data(axis);
+            // The kept references in this order, read before the children overwrite the node.
+            std::array<std::vector<Reference>, 2> kept;
+            if (axis == 0) {  // `references` holds them in x order already
+                for (int child = 0; child < 2; ++child)
+                    kept[child].assign(order + firsts[child], order + firsts[child] + kept_counts[child]);
+            } else {
+                for (int child = 0; child < 2; ++child) kept[child].reserve(kept_counts[child]);
+                for (const Reference& reference : std::span<const Reference>(order + begin, count)) {
+                    const PlaneSide side = plane_side(reference, split.axis, split.position);
+                    if (side != PlaneSide::straddles) kept[side == PlaneSide::left ? 0 : 1].push_back(reference);
+                }
+            }
+            for (int child = 0; child < 2; ++child) {
+                if (kept[child].size() != kept_counts[child])
+                    throw Error("internal: the centroid orders split differently");
+                std::vector<Reference> sorted_pieces = pieces[child];
+                sort_in_centroid_order(sorted_pieces, axis);
+                std::merge(kept[child].begin(), kept[child].end(), sorted_pieces.begin(), sorted_pieces.end(),
+                           order + firsts[child], CentroidOrder{axis});
+            }
+        });
+    }
+
+    // A grid split (or a fallback after a failed split): the copies take the children from
+    // `references`, then the three orders are sorted.
+    void sort_orders_again(uint32_t begin, const ChildRanges& children) {
+        const uint32_t firsts[2] = {begin, begin + children.left_capacity};
+        const uint32_t counts[2] = {children.left_count, children.right_count};
+        for (int axis = 1; axis < 3; ++axis)
+            for (int child = 0; child < 2; ++child)
+                std::copy_n(references.data() + firsts[child], counts[child], order_data(axis) + firsts[child]);
+        for_each_order(counts[0] + counts[1], [&](int axis) {
+            for (int child = 0; child < 2; ++child)
+                sort_in_centroid_order({order_data(axis) + firsts[child], counts[child]}, axis);
+        });
     }
 
     // Depth-first, left first; the two children of a node are stored next to each other. A leaf
@@ -154,6 +259,11 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     Impl impl{*this, search, lookahead, whole_subtree_lookahead, top_node_references, std::move(references)};
     impl.input_count = count;
     impl.references.resize(capacity);
+    impl.keeps_orders = search.reads_centroid_orders();
+    if (impl.keeps_orders) {
+        impl.other_orders = {impl.references, impl.references};
+        Impl::for_each_order(uint32_t(count), [&](int axis) { sort_in_centroid_order({impl.order_data(axis), count}, axis); });
+    }
     impl.slots.resize(2 * capacity - 1);
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);
 
