@@ -96,11 +96,12 @@ void sort_in_centroid_order(std::span<Reference> references, int axis) {
 namespace {
 
 // The axes a node can be cut on (its centroids not all equal there), in the order to sweep them:
-// first one on which its references are already sorted, then the others. A child of a sweep split
-// inherits its parent's order (apply_split keeps it), that of the last axis the parent swept, so
-// one of its three sorts is skipped (the check is linear and stops at the first reference out of
-// order). The sweep's answer does not depend on this order: CheapestSplit and SplitCandidates
-// break ties by axis, not by the order of offers across axes.
+// first one on which its references are already sorted, then the others. Without the driver's
+// orders (the lookahead's subtrees) a node arrives in its parent's order, which apply_split keeps
+// and SplitSearch::order_for_apply makes the x order, so one of its three sorts is skipped (the
+// check is linear and stops at the first reference out of order). The sweep's answer does not
+// depend on this order: CheapestSplit and SplitCandidates break ties by axis, not by the order of
+// offers across axes.
 struct SweepOrder {
     std::array<int, 3> axes{};
     int count = 0;

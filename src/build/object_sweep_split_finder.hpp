@@ -32,7 +32,9 @@ struct CentroidOrder {
     }
 };
 
-// Sorts the references by CentroidOrder{axis} (the sweep's sort; radix sort on integer keys).
+// Sorts the references by CentroidOrder{axis} (the sweep's sort; radix sort on integer keys), in
+// place or into `sorted`.
 void sort_in_centroid_order(std::span<Reference> references, int axis);
+void sort_in_centroid_order(std::span<const Reference> references, int axis, std::vector<Reference>& sorted);
 
 }  // namespace spacebvh::build

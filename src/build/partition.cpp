@@ -159,8 +159,8 @@ ChildRanges apply_split(std::span<Reference> storage, uint32_t count, const Spli
     if (split.kind == SplitKind::spatial) return apply_spatial_split(storage, count, split, triangles);
     if (split.kind == SplitKind::grid) return apply_grid_split(storage, count, split, triangles);
     // In order (a stable partition): the children keep the node's order, so the driver's centroid
-    // orders stay sorted (top_down_builder.cpp) and, without them, children inherit the order of
-    // the last axis the sweep sorted, which saves one of their sorts (object_sweep_split_finder.cpp).
+    // orders stay sorted (top_down_builder.cpp) and, without them, a child sorted on an axis skips
+    // that sort (object_sweep_split_finder.cpp, sweep_order).
     uint32_t left_count = 0;
     if (split.kind == SplitKind::object_binned) {
         // The common case of the binned builders, without goes_left's dispatch per reference.

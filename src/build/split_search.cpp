@@ -1,8 +1,8 @@
 #include "build/split_search.hpp"
 
-#include "build/object_sweep_split_finder.hpp"
-
 #include <algorithm>
+
+#include "build/object_sweep_split_finder.hpp"
 
 namespace spacebvh::build {
 

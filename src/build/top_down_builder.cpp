@@ -178,8 +178,8 @@ struct TopDownBuilder::Impl {
             for (int child = 0; child < 2; ++child) {
                 if (kept[child].size() != kept_counts[child])
                     throw Error("internal: the centroid orders split differently");
-                std::vector<Reference> sorted_pieces = pieces[child];
-                sort_in_centroid_order(sorted_pieces, axis);
+                std::vector<Reference> sorted_pieces;
+                sort_in_centroid_order(pieces[child], axis, sorted_pieces);
                 std::merge(kept[child].begin(), kept[child].end(), sorted_pieces.begin(), sorted_pieces.end(),
                            order + firsts[child], CentroidOrder{axis});
             }
