@@ -97,15 +97,27 @@ struct SpatialBins {
         if (middle[axis] < low[axis]) std::swap(low, middle);
         if (high[axis] < middle[axis]) std::swap(middle, high);
         if (middle[axis] < low[axis]) std::swap(low, middle);
-        // Each vertex in its bin among first..last (the end bin for those beyond the reference).
+        // Each vertex in its bin among first..last (the end bin for those beyond the reference). The
+        // low vertex lies below plane first + 1 and the high one above plane last (they bound the
+        // reference), so only the middle one normally needs the search; the tests give the bin the
+        // search would give.
+        const float inner_lo = binning.plane(first + 1), inner_hi = binning.plane(last);
         for (const Vec3& vertex : {low, middle, high}) {
             const float x = vertex[axis];
-            uint32_t bin = std::clamp(binning.bin_of(x), first, last);
-            while (bin > first && binning.plane(bin) > x) --bin;
-            while (bin < last && binning.plane(bin + 1) < x) ++bin;
+            uint32_t bin;
+            if (x < inner_lo) {
+                bin = first;
+            } else if (x > inner_hi) {
+                bin = last;
+            } else {
+                bin = std::clamp(binning.bin_of(x), first, last);
+                while (bin > first && binning.plane(bin) > x) --bin;
+                while (bin < last && binning.plane(bin + 1) < x) ++bin;
+            }
+            // Clamped into the slab, so always in it.
             const float clamped_x = std::clamp(std::clamp(x, axis_lo, axis_hi), binning.plane(bin), binning.plane(bin + 1));
             const __m128 point = simd(vertex);
-            if (in_slab(clamped_x, bin)) boxes[bin].extend(clamped(point, point, clamped_x));
+            boxes[bin].extend(clamped(point, point, clamped_x));
         }
         // Each inner plane cuts the triangle in a segment: from the long edge (low to high) to one of
         // the short ones. The segment belongs to both bins beside the plane.
@@ -116,36 +128,62 @@ struct SpatialBins {
         const float inverse_upper = x_high > x_middle ? 1.0f / (x_high - x_middle) : 0.0f;
         const __m128 low_point = simd(low), middle_point = simd(middle);
         const __m128 long_edge = simd(high - low), lower_edge = simd(middle - low), upper_edge = simd(high - middle);
+        // The segment on a plane between the long edge and the short edge starting at `short_start`
+        // (t_short: the plane's parameter on it), unclamped.
+        auto segment_at = [&](float plane, __m128 short_start, __m128 short_edge, float t_short) {
+            const float t_long = std::clamp((plane - x_low) * inverse_long, 0.0f, 1.0f);
+            const __m128 on_long = _mm_add_ps(low_point, _mm_mul_ps(long_edge, _mm_set1_ps(t_long)));
+            const __m128 on_short =
+                _mm_add_ps(short_start, _mm_mul_ps(short_edge, _mm_set1_ps(std::clamp(t_short, 0.0f, 1.0f))));
+            return SimdBox{_mm_min_ps(on_long, on_short), _mm_max_ps(on_long, on_short)};
+        };
+        auto lower_segment = [&](float plane) { return segment_at(plane, low_point, lower_edge, (plane - x_low) * inverse_lower); };
+        auto upper_segment = [&](float plane) {
+            return segment_at(plane, middle_point, upper_edge, (plane - x_middle) * inverse_upper);
+        };
         // The segment on plane k goes to bins k - 1 and k; `carry` holds the one on plane k - 1 until
         // bin k - 1 is extended by both, so each bin is read and written once.
         SimdBox carry;
+        auto add_segments = [&](uint32_t k, const SimdBox& below, const SimdBox& above) {
+            carry.extend(below);
+            boxes[k - 1].extend(carry);
+            carry = above;
+        };
+        if (inner_lo > axis_lo && inner_hi < axis_hi && inner_lo >= x_low && inner_hi <= x_high) {
+            // The common case: every inner plane cuts the triangle inside the reference, so each
+            // segment goes to both bins whole. The general loop below, with its tests hoisted: the
+            // planes up to the middle vertex end on the lower short edge, the rest on the upper one.
+            uint32_t k = first + 1;
+            if (x_middle > x_low)
+                for (float plane; k <= last && (plane = binning.plane(k)) <= x_middle; ++k) {
+                    const SimdBox segment = lower_segment(plane);
+                    const SimdBox whole = clamped(segment.lo, segment.hi, plane);
+                    add_segments(k, whole, whole);
+                }
+            for (; k <= last; ++k) {
+                const float plane = binning.plane(k);
+                const SimdBox segment = upper_segment(plane);
+                const SimdBox whole = clamped(segment.lo, segment.hi, plane);
+                add_segments(k, whole, whole);
+            }
+            boxes[last].extend(carry);
+            return;
+        }
         for (uint32_t k = first + 1; k <= last; ++k) {
             const float plane = binning.plane(k);
             SimdBox below, above;  // empty: plane k does not cut the triangle
             if (plane >= x_low && plane <= x_high) {
-                const float t_long = std::clamp((plane - x_low) * inverse_long, 0.0f, 1.0f);
-                const __m128 on_long = _mm_add_ps(low_point, _mm_mul_ps(long_edge, _mm_set1_ps(t_long)));
-                __m128 on_short;
-                if (plane <= x_middle && x_middle > x_low) {
-                    const float t = std::clamp((plane - x_low) * inverse_lower, 0.0f, 1.0f);
-                    on_short = _mm_add_ps(low_point, _mm_mul_ps(lower_edge, _mm_set1_ps(t)));
-                } else {
-                    const float t = std::clamp((plane - x_middle) * inverse_upper, 0.0f, 1.0f);
-                    on_short = _mm_add_ps(middle_point, _mm_mul_ps(upper_edge, _mm_set1_ps(t)));
-                }
-                const __m128 lo = _mm_min_ps(on_long, on_short), hi = _mm_max_ps(on_long, on_short);
-                if (plane > axis_lo && plane < axis_hi) {  // the common case: in both slabs
-                    below = above = clamped(lo, hi, plane);
+                const SimdBox segment = plane <= x_middle && x_middle > x_low ? lower_segment(plane) : upper_segment(plane);
+                if (plane > axis_lo && plane < axis_hi) {  // in both slabs
+                    below = above = clamped(segment.lo, segment.hi, plane);
                 } else {
                     const float x = std::clamp(plane, axis_lo, axis_hi);
-                    const SimdBox segment = clamped(lo, hi, x);
-                    if (in_slab(x, k - 1)) below = segment;
-                    if (in_slab(x, k)) above = segment;
+                    const SimdBox clamped_segment = clamped(segment.lo, segment.hi, x);
+                    if (in_slab(x, k - 1)) below = clamped_segment;
+                    if (in_slab(x, k)) above = clamped_segment;
                 }
             }
-            carry.extend(below);
-            boxes[k - 1].extend(carry);
-            carry = above;
+            add_segments(k, below, above);
         }
         boxes[last].extend(carry);
     }
