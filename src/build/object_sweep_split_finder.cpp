@@ -160,10 +160,17 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
         SimdBox left;
         for (size_t i = 1; i < count; ++i) {
             left.extend_as_aabb(sorted[i - 1].bounds);
-            // As CostModel::split_cost prices the cut.
-            const float overlap_factor = penalised ? cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i])) : 1.0f;
-            if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
-            const float split_cost = cost.split_cost_of_areas(node_area, left.area(), i, suffix_area[i], count - i, overlap_factor);
+            // As CostModel::split_cost prices the cut. The overlap factor is >= 1 and multiplies a
+            // non-negative term, so the plain SAH price is a lower bound, to the bit: a cut that loses
+            // without the penalty needs no overlap (three divisions).
+            const float left_area = left.area();
+            float split_cost = cost.split_cost_of_areas(node_area, left_area, i, suffix_area[i], count - i);
+            if (!(split_cost < sink.threshold(axis))) continue;
+            if (penalised) {
+                const float overlap_factor = cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i]));
+                if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
+                split_cost = cost.split_cost_of_areas(node_area, left_area, i, suffix_area[i], count - i, overlap_factor);
+            }
             if (split_cost < sink.threshold(axis)) {
                 Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),
                                          suffix_bounds[i].aabb(), uint32_t(count - i));
