@@ -170,13 +170,12 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
                 const float overlap_factor = cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i]));
                 if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
                 split_cost = cost.split_cost_of_areas(node_area, left_area, i, suffix_area[i], count - i, overlap_factor);
+                if (!(split_cost < sink.threshold(axis))) continue;
             }
-            if (split_cost < sink.threshold(axis)) {
-                Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),
-                                         suffix_bounds[i].aabb(), uint32_t(count - i));
-                split.tie = sorted[i];
-                sink.offer(split);
-            }
+            Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),
+                                     suffix_bounds[i].aabb(), uint32_t(count - i));
+            split.tie = sorted[i];
+            sink.offer(split);
         }
     }
 }
