@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 
 #include <array>
 #include <cstdio>
@@ -354,6 +355,22 @@ TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
         EXPECT_GT((*row)["peak_rss_bytes"].get<double>(), 0.0) << name;
     }
     EXPECT_GE(json["peak_rss_bytes"].get<double>(), scene["rows"][0]["peak_rss_bytes"].get<double>());
+}
+
+// SPACEBVH_EMBREE_CONFIG reaches Embree's device: "verbose=3" makes Embree print the statistics of
+// the BVH it builds for the Embree row (its SAH line); without it, Embree stays silent.
+TEST_F(Cli, EmbreeConfigFromEnvironment) {
+    const std::string args = "compare builtin:soup --builders cbvh --kernel bvh8 --embree high --embree-packets none "
+                             "--random 500 --width 16 --height 16 --runs 1 --build-runs 1 --no-epo --no-verify -q";
+    // The child inherits the test's environment.
+    setenv("SPACEBVH_EMBREE_CONFIG", "verbose=3", 1);
+    const CliResult verbose = run(args);
+    unsetenv("SPACEBVH_EMBREE_CONFIG");
+    ASSERT_EQ(verbose.exit_code, 0) << verbose.output;
+    EXPECT_NE(verbose.output.find("sah ="), std::string::npos) << verbose.output;
+    const CliResult quiet = run(args);
+    ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+    EXPECT_EQ(quiet.output.find("sah ="), std::string::npos) << quiet.output;
 }
 
 // `--lookahead` and `NAME@lookahead=D` build by recursive cost evaluation; the trees answer correctly.
