@@ -1,6 +1,7 @@
 // The collapse of binary trees into wide nodes (src/trace/wide_collapse.hpp): the SAH-optimal plan
 // against an exhaustive search over every way to cut small trees, against Embree's largest-area rule
-// on the built-in scenes, and the plan's coverage (every triangle of the tree in some reachable leaf).
+// on the built-in scenes, the plan's coverage (every triangle of the tree in some reachable leaf), and
+// the layout's slot order (wide_layout.cpp: decreasing subtree size, empty slots last).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include "spacebvh/bvh.hpp"
 #include "test_support.hpp"
 #include "trace/wide_collapse.hpp"
+#include "trace/wide_layout.hpp"
 
 using namespace spacebvh;
 using testing_support::cached_builtin_scene;
@@ -164,4 +166,52 @@ TEST(WideCollapse, SahOptimalPlanBeatsLargestAreaAndCoversEveryTriangle) {
         }
     }
     EXPECT_GT(strictly_cheaper, 0u);
+}
+
+namespace {
+
+// Triangle lanes under a wide node (leaf lanes summed over its subtree); checks on the way that each
+// node's used slots come first, in non-increasing order of the lanes under them.
+template <int W>
+uint64_t lanes_checking_order(const trace::WideLayout<W>& layout, uint32_t index, size_t& misordered) {
+    const trace::WideNode<W>& node = layout.nodes[index];
+    uint64_t total = 0, previous = std::numeric_limits<uint64_t>::max();
+    bool empty_seen = false;
+    for (int slot = 0; slot < W; ++slot) {
+        const bool used = node.planes[0][slot] <= node.planes[1][slot];
+        if (!used) {
+            empty_seen = true;
+            continue;
+        }
+        const uint64_t lanes = node.count[slot] ? node.count[slot] : lanes_checking_order(layout, node.child[slot], misordered);
+        misordered += empty_seen || lanes > previous;
+        previous = lanes;
+        total += lanes;
+    }
+    return total;
+}
+
+template <int W>
+void expect_slots_by_decreasing_size(const Scene& scene, const Bvh& bvh) {
+    const trace::WideLayout<W> layout = trace::collapse_to_wide<W>(scene, bvh, WideCollapse::sah_optimal);
+    size_t misordered = 0;
+    const uint64_t lanes = lanes_checking_order(layout, 0, misordered);
+    EXPECT_EQ(misordered, 0u);
+    EXPECT_GE(lanes, bvh.primitives.empty() ? 0u : 1u);
+}
+
+}  // namespace
+
+// The any-hit kernels pop a node's other entered children smallest subtree first because the layout
+// orders each node's slots by decreasing size (wide_layout.cpp): check that order on every node.
+TEST(WideLayout, SlotsComeInDecreasingSubtreeSizeWithEmptySlotsLast) {
+    for (const std::string& scene_name : builtin_scene_names()) {
+        const Scene& scene = cached_builtin_scene(scene_name);
+        for (const char* builder : {"cbvh", "spatial"}) {
+            SCOPED_TRACE(scene_name + ", " + builder);
+            const Bvh bvh = build_bvh(scene, options_for(builder));
+            expect_slots_by_decreasing_size<4>(scene, bvh);
+            expect_slots_by_decreasing_size<8>(scene, bvh);
+        }
+    }
 }

@@ -163,7 +163,8 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 S::store(entry, near);
                 if constexpr (kAnyHit) {
                     // Any hit: the farthest entered child next (ties: the later slot), the others pushed
-                    // unsorted in slot order. A diffuse ray starts on a surface whose neighbourhood it must
+                    // unsorted in slot order, so they pop smallest subtree first (the layout orders a
+                    // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a surface whose neighbourhood it must
                     // cross but which rarely occludes it, so the far child is the likelier occluder; and
                     // sorting them all costs more than it saves. Embree pushes unsorted; sorting all
                     // (leaf children first, then farthest first, as the packets do) measured slower.

@@ -24,18 +24,53 @@ WideNode<W> empty_node() {
     return node;
 }
 
+// Puts a node's children in decreasing order of the triangle lanes under them (ties keep their order;
+// empty slots go last). The any-hit kernels follow the farthest entered child and pop the others
+// from the stack in reverse slot order (wide_kernel.inl), so of those the smallest subtree, the
+// cheapest to search for an occluder, comes first; Embree orders its children by size for shadow
+// rays too. Child boxes tested per occlusion ray (BVH8), against the collapse's own order: Sponza
+// diffuse (cbvh+opt, leaf blocks of 4) 17.25 -> 16.85, rotated Sponza diffuse / random
+// (spatial+opt) 30.52 -> 29.68 / 20.64 -> 20.29, sibenik random 27.09 -> 26.99; Mrays/s (1 thread,
+// medians of 7 alternated runs) 1.037x, 1.020x / 1.013x, 1.013x. Mostly free rays (bunny) and
+// closest hits do the same work; closest hits only see slot order when distances tie.
+template <int W>
+void order_slots_by_size(WideNode<W>& node, uint64_t (&lanes)[W]) {
+    int order[W];
+    for (int slot = 0; slot < W; ++slot) order[slot] = slot;
+    const auto used = [&](int slot) { return node.planes[0][slot] <= node.planes[1][slot]; };
+    std::stable_sort(order, order + W, [&](int a, int b) {
+        if (used(a) != used(b)) return used(a);
+        return lanes[a] > lanes[b];
+    });
+    const WideNode<W> old = node;
+    uint64_t old_lanes[W];
+    std::copy(lanes, lanes + W, old_lanes);
+    for (int slot = 0; slot < W; ++slot) {
+        for (int plane = 0; plane < 6; ++plane) node.planes[plane][slot] = old.planes[plane][order[slot]];
+        node.child[slot] = old.child[order[slot]];
+        node.count[slot] = old.count[order[slot]];
+        lanes[slot] = old_lanes[order[slot]];
+    }
+}
+
 template <int W>
 class Collapser {
 public:
     Collapser(const Scene& scene, const Bvh& bvh, WideLayout<W>& layout, WideCollapse collapse)
         : scene_(scene), bvh_(bvh), layout_(layout), plan_(scene, bvh, W, collapse), packer_(scene, bvh, layout.packs) {}
 
+    struct MadeNode {
+        uint32_t index;  // of its WideNode
+        uint64_t lanes;  // triangle lanes in all leaves under it (its cost to search)
+    };
+
     // Makes the wide node for binary inner node (or, for a leaf root, a node with that one leaf) and
-    // its subtree; returns its index.
-    uint32_t make_node(uint32_t bvh_index) {
+    // its subtree.
+    MadeNode make_node(uint32_t bvh_index) {
         const std::vector<CollapseSlot> children = plan_.slots(bvh_index);
         const uint32_t index = uint32_t(layout_.nodes.size());
         layout_.nodes.push_back(empty_node<W>());
+        uint64_t lanes[W] = {};
         // Leaves first, so the leaves of one node share packs (LeafPacker), then the subtrees.
         for (int slot = 0; slot < int(children.size()); ++slot) {
             if (!children[slot].leaf) continue;
@@ -43,14 +78,19 @@ public:
             const auto [first, count] =
                 child.is_leaf() ? packer_.add(child) : packer_.add(subtree_triangles(scene_, bvh_, children[slot].node));
             set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
+            lanes[slot] = count;
         }
         for (int slot = 0; slot < int(children.size()); ++slot) {
             if (children[slot].leaf) continue;
             // Recursion depth is the tree depth, which build options cap at 1024.
-            const uint32_t inner = make_node(children[slot].node);
-            set_child(layout_.nodes[index], slot, bvh_.nodes[children[slot].node].bounds, inner, 0);
+            const MadeNode inner = make_node(children[slot].node);
+            set_child(layout_.nodes[index], slot, bvh_.nodes[children[slot].node].bounds, inner.index, 0);
+            lanes[slot] = inner.lanes;
         }
-        return index;
+        order_slots_by_size(layout_.nodes[index], lanes);
+        uint64_t total = 0;
+        for (uint64_t slot_lanes : lanes) total += slot_lanes;
+        return {index, total};
     }
 
 private:

@@ -14,7 +14,8 @@ namespace spacebvh::trace {
 
 // One node: the boxes of its (up to) W children in SoA, so one SIMD load reads one plane of all
 // children. planes[2 * axis] holds the lower bounds on `axis`, planes[2 * axis + 1] the upper ones.
-// Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters.
+// Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters; they come last, the others
+// in decreasing order of the triangles under them (the any-hit order, wide_layout.cpp).
 // child[i]: inner child (count[i] == 0): index of its WideNode; leaf (count[i] > 0): index of its
 // first TrianglePack (triangle_pack.hpp); it is tested as count[i] lanes from there (LeafPacker).
 template <int W>
