@@ -178,8 +178,7 @@ uint64_t lanes_checking_order(const trace::WideLayout<W>& layout, uint32_t index
     uint64_t total = 0, previous = std::numeric_limits<uint64_t>::max();
     bool empty_seen = false;
     for (int slot = 0; slot < W; ++slot) {
-        const bool used = node.planes[0][slot] <= node.planes[1][slot];
-        if (!used) {
+        if (!node.used(slot)) {
             empty_seen = true;
             continue;
         }

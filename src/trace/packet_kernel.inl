@@ -262,7 +262,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             const WideNode<W>& node = layout.nodes[current.child];
             uint32_t valid_children = 0;
             if constexpr (kStats)
-                for (int slot = 0; slot < W; ++slot) valid_children += node.planes[0][slot] <= node.planes[1][slot];
+                for (int slot = 0; slot < W; ++slot) valid_children += node.used(slot);
             alignas(32) float first_entry[W];
             uint32_t first_ray[W];
             unsigned assigned = 0;

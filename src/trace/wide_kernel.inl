@@ -152,7 +152,7 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
         if (current.count == 0) {
             const WideNode<W>& node = nodes[current.child];
             if constexpr (kStats)
-                for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.planes[0][slot] <= node.planes[1][slot];
+                for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.used(slot);
             typename S::F near;
             unsigned mask = child_hit_mask<S>(node, boxes, tmin, tmax, near);
             if (mask != 0) {
@@ -164,10 +164,11 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                 if constexpr (kAnyHit) {
                     // Any hit: the farthest entered child next (ties: the later slot), the others pushed
                     // unsorted in slot order, so they pop smallest subtree first (the layout orders a
-                    // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a surface whose neighbourhood it must
-                    // cross but which rarely occludes it, so the far child is the likelier occluder; and
-                    // sorting them all costs more than it saves. Embree pushes unsorted; sorting all
-                    // (leaf children first, then farthest first, as the packets do) measured slower.
+                    // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a
+                    // surface whose neighbourhood it must cross but which rarely occludes it, so the
+                    // far child is the likelier occluder; and sorting them all costs more than it
+                    // saves. Embree pushes unsorted; sorting all (leaf children first, then farthest
+                    // first, as the packets do) measured slower.
                     uint32_t farthest = uint32_t(__builtin_ctz(mask));
                     for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
                         const uint32_t lane = uint32_t(__builtin_ctz(rest));

@@ -23,6 +23,9 @@ struct alignas(64) WideNode {
     float planes[6][W];
     uint32_t child[W];
     uint32_t count[W];
+
+    // Whether slot holds a child (unused slots hold empty boxes).
+    [[gnu::always_inline]] bool used(int slot) const { return planes[0][slot] <= planes[1][slot]; }
 };
 static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256);
 
