@@ -1,4 +1,4 @@
-// The binned spatial search space (src/build/binned_spatial_split_finder.hpp): its bins against the
+// The binned spatial search space (src/builders/binned_spatial_split_finder.hpp): its bins against the
 // exact clipping of apply_split, and when its search is skipped (the budget and alpha gates).
 #include <gtest/gtest.h>
 
@@ -8,15 +8,15 @@
 #include <string>
 #include <vector>
 
-#include "build/binned_spatial_split_finder.hpp"
-#include "build/object_sweep_split_finder.hpp"
-#include "build/partition.hpp"
-#include "build/spatial_split.hpp"
+#include "builders/binned_spatial_split_finder.hpp"
+#include "builders/object_sweep_split_finder.hpp"
+#include "builders/partition.hpp"
+#include "builders/spatial_split.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 
-namespace spacebvh::build {
+namespace spacebvh::builders {
 namespace {
 
 using Node = testing_support::SmallNode;
@@ -174,4 +174,4 @@ TEST(BinnedSpatial, GateAlphaOptionControlsTheSpatialSearch) {
 }
 
 }  // namespace
-}  // namespace spacebvh::build
+}  // namespace spacebvh::builders

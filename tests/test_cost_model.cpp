@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-#include "build/simd_box.hpp"
+#include "builders/simd_box.hpp"
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
 
@@ -234,7 +234,7 @@ TEST(CostModel, LeafBlocksRoundReferenceCountsUp) {
     }
 }
 
-// The object sweep prices cuts from SimdBox registers (src/build/simd_box.hpp): its extend, area and
+// The object sweep prices cuts from SimdBox registers (src/builders/simd_box.hpp): its extend, area and
 // overlap fraction must give the AABB forms' results bit for bit, or the sweep would build other
 // trees. Random boxes, partly on a coarse grid (so that touching, flat and equal coordinates, and -0
 // against +0, occur), partly with full mantissas (so that rounding order shows), some empty.
@@ -270,7 +270,7 @@ TEST(CostModel, SimdBoxesPriceExactlyAsAabbs) {
     for (int trial = 0; trial < 20000; ++trial) {
         const AABB node = merge(random_box(), random_box());
         AABB left, right;
-        build::SimdBox simd_left, simd_right;
+        builders::SimdBox simd_left, simd_right;
         for (int k = 0; k < 3; ++k) {
             const Record a{random_box()}, b{random_box()};
             left.extend(a.bounds);
@@ -284,10 +284,10 @@ TEST(CostModel, SimdBoxesPriceExactlyAsAabbs) {
         }
         ASSERT_TRUE(same_bits(simd_left.area(), left.area())) << trial;
         ASSERT_TRUE(same_bits(simd_right.area(), right.area())) << trial;
-        const __m128 node_extent = _mm_sub_ps(build::simd(node.hi), build::simd(node.lo));
+        const __m128 node_extent = _mm_sub_ps(builders::simd(node.hi), builders::simd(node.lo));
         const float expected = overlap_fraction(node, left, right);
-        ASSERT_TRUE(same_bits(build::overlap_fraction(node_extent, simd_left, simd_right), expected) ||
-                    (expected == 0.0f && build::overlap_fraction(node_extent, simd_left, simd_right) == 0.0f))
+        ASSERT_TRUE(same_bits(builders::overlap_fraction(node_extent, simd_left, simd_right), expected) ||
+                    (expected == 0.0f && builders::overlap_fraction(node_extent, simd_left, simd_right) == 0.0f))
             << trial;
         overlapping += expected > 0.0f;
         const CostModel cost = model(1.0f, 1.0f, 0.0f);

@@ -1,4 +1,4 @@
-// The exhaustive optimum (src/build/exhaustive_split.hpp): equal to a naive enumeration, and never
+// The exhaustive optimum (src/builders/exhaustive_split.hpp): equal to a naive enumeration, and never
 // beaten by an object-partitioning search space (object sweep, binned object, grid without
 // splitting) under the same cost model, for plain SAH, a finite overlap penalty and C_o = inf.
 #include <gtest/gtest.h>
@@ -7,14 +7,14 @@
 #include <random>
 #include <vector>
 
-#include "build/binned_object_split_finder.hpp"
-#include "build/exhaustive_split.hpp"
-#include "build/grid_split_finder.hpp"
-#include "build/object_sweep_split_finder.hpp"
+#include "builders/binned_object_split_finder.hpp"
+#include "builders/exhaustive_split.hpp"
+#include "builders/grid_split_finder.hpp"
+#include "builders/object_sweep_split_finder.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 
-namespace spacebvh::build {
+namespace spacebvh::builders {
 namespace {
 
 using Node = testing_support::SmallNode;
@@ -110,4 +110,4 @@ TEST(Exhaustive, RefusesLargeNodes) {
 }
 
 }  // namespace
-}  // namespace spacebvh::build
+}  // namespace spacebvh::builders

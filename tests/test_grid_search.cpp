@@ -1,4 +1,4 @@
-// The grid search space (src/build/grid_split_finder.hpp): its containment counts and its best
+// The grid search space (src/builders/grid_split_finder.hpp): its containment counts and its best
 // configuration against brute force on every configuration of random small nodes, its relation to
 // the object sweep and the kd (spatial) planes where its search space contains theirs, and the
 // composable search spaces (--search) and `full` preset.
@@ -8,15 +8,15 @@
 #include <random>
 #include <vector>
 
-#include "build/binned_spatial_split_finder.hpp"
-#include "build/grid_split_finder.hpp"
-#include "build/object_sweep_split_finder.hpp"
-#include "build/partition.hpp"
+#include "builders/binned_spatial_split_finder.hpp"
+#include "builders/grid_split_finder.hpp"
+#include "builders/object_sweep_split_finder.hpp"
+#include "builders/partition.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 
-namespace spacebvh::build {
+namespace spacebvh::builders {
 namespace {
 
 using Node = testing_support::SmallNode;
@@ -347,4 +347,4 @@ TEST(SearchSpaces, AnyUnionBuildsAValidTreeWithAnyOverlapPenalty) {
 }
 
 }  // namespace
-}  // namespace spacebvh::build
+}  // namespace spacebvh::builders

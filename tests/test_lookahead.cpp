@@ -1,4 +1,4 @@
-// Recursive cost evaluation (src/build/lookahead.hpp) and what it rests on: the search spaces'
+// Recursive cost evaluation (src/builders/lookahead.hpp) and what it rests on: the search spaces'
 // candidate lists (SplitFinder::find_candidates), the candidates of all search spaces
 // (SplitSearch::candidates), the pricing of a candidate's subtree, and cancellation of a build.
 #include <gtest/gtest.h>
@@ -11,13 +11,13 @@
 #include <random>
 #include <vector>
 
-#include "build/binned_object_split_finder.hpp"
-#include "build/binned_spatial_split_finder.hpp"
-#include "build/lookahead.hpp"
-#include "build/object_sweep_split_finder.hpp"
-#include "build/partition.hpp"
-#include "build/split_search.hpp"
-#include "build/top_down_builder.hpp"
+#include "builders/binned_object_split_finder.hpp"
+#include "builders/binned_spatial_split_finder.hpp"
+#include "builders/lookahead.hpp"
+#include "builders/object_sweep_split_finder.hpp"
+#include "builders/partition.hpp"
+#include "builders/split_search.hpp"
+#include "builders/top_down_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/metrics.hpp"
@@ -26,9 +26,9 @@
 namespace spacebvh {
 namespace {
 
-using build::Reference;
-using build::ReferenceSummary;
-using build::Split;
+using builders::Reference;
+using builders::ReferenceSummary;
+using builders::Split;
 
 // Nodes to search: random samples of the soup's and the interior's references (a sample of a scene
 // is a node whose references are spread like a real node's), from tiny to a few thousand.
@@ -42,7 +42,7 @@ std::vector<TestNode> test_nodes() {
     std::mt19937 random(7);
     for (const char* name : {"soup", "interior"}) {
         const Scene& scene = testing_support::cached_builtin_scene(name);
-        const std::vector<Reference> all = build::make_references(scene);
+        const std::vector<Reference> all = builders::make_references(scene);
         for (size_t count : {2, 3, 9, 40, 300, 2500}) {
             TestNode node{&scene, {}};
             std::sample(all.begin(), all.end(), std::back_inserter(node.references), count, random);
@@ -59,13 +59,13 @@ bool same_split(const Split& a, const Split& b) {
            a.tie.bounds == b.tie.bounds;
 }
 
-std::vector<std::unique_ptr<build::SplitFinder>> every_search_space(const Scene& scene, float gate_alpha = 0.0f) {
-    std::vector<std::unique_ptr<build::SplitFinder>> spaces;
-    spaces.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
-    spaces.push_back(std::make_unique<build::BinnedObjectSplitFinder>(32));
-    build::SpatialSearchOptions spatial;
+std::vector<std::unique_ptr<builders::SplitFinder>> every_search_space(const Scene& scene, float gate_alpha = 0.0f) {
+    std::vector<std::unique_ptr<builders::SplitFinder>> spaces;
+    spaces.push_back(std::make_unique<builders::ObjectSweepSplitFinder>());
+    spaces.push_back(std::make_unique<builders::BinnedObjectSplitFinder>(32));
+    builders::SpatialSearchOptions spatial;
     spatial.gate_alpha = gate_alpha;
-    spaces.push_back(std::make_unique<build::BinnedSpatialSplitFinder>(scene.triangles, spatial));
+    spaces.push_back(std::make_unique<builders::BinnedSpatialSplitFinder>(scene.triangles, spatial));
     return spaces;
 }
 
@@ -78,7 +78,7 @@ TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
     const CostModel cost;
     size_t checked = 0;
     for (TestNode& node : test_nodes()) {
-        const ReferenceSummary summary = build::summarize(node.references);
+        const ReferenceSummary summary = builders::summarize(node.references);
         for (const auto& space : every_search_space(*node.scene)) {
             for (uint32_t per_axis : {1u, 2u, 5u}) {
                 SCOPED_TRACE(std::string(space->name()) + ", " + std::to_string(node.references.size()) +
@@ -108,7 +108,7 @@ TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
                 if (std::string(space->name()) != "object-sweep") continue;
                 for (int axis = 0; axis < 3; ++axis) {
                     std::vector<Reference> sorted = node.references;
-                    std::sort(sorted.begin(), sorted.end(), build::CentroidOrder{axis});
+                    std::sort(sorted.begin(), sorted.end(), builders::CentroidOrder{axis});
                     std::vector<float> all_cuts;
                     if (summary.centroid_bounds.lo[axis] != summary.centroid_bounds.hi[axis]) {
                         std::vector<AABB> right(sorted.size());  // right[i]: box of sorted[i..]
@@ -141,15 +141,15 @@ TEST(ObjectSweep, SplitDoesNotDependOnTheReferencesOrder) {
         CostModel cost;
         cost.overlap_penalty = overlap_penalty;
         for (TestNode& node : test_nodes()) {
-            const ReferenceSummary summary = build::summarize(node.references);
-            const build::ObjectSweepSplitFinder sweep;
+            const ReferenceSummary summary = builders::summarize(node.references);
+            const builders::ObjectSweepSplitFinder sweep;
             const Split none;
             std::vector<Reference> shuffled = node.references;
             std::shuffle(shuffled.begin(), shuffled.end(), random);
             const Split reference_split = sweep.find({shuffled, summary, shuffled.size(), summary.bounds.area(), none}, cost);
             for (int axis = 0; axis < 3; ++axis) {
                 std::vector<Reference> sorted = node.references;
-                std::sort(sorted.begin(), sorted.end(), build::CentroidOrder{axis});
+                std::sort(sorted.begin(), sorted.end(), builders::CentroidOrder{axis});
                 const Split split = sweep.find({sorted, summary, sorted.size(), summary.bounds.area(), none}, cost);
                 EXPECT_TRUE(same_split(split, reference_split)) << node.references.size() << " references, sorted on " << axis;
                 ++checked;
@@ -184,8 +184,8 @@ TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
         const std::vector<Reference> input = references_with_equal_keys(count, 5);
         for (int axis = 0; axis < 3; ++axis) {
             std::vector<Reference> sorted = input, expected = input;
-            build::sort_in_centroid_order(sorted, axis);
-            std::sort(expected.begin(), expected.end(), build::CentroidOrder{axis});
+            builders::sort_in_centroid_order(sorted, axis);
+            std::sort(expected.begin(), expected.end(), builders::CentroidOrder{axis});
             for (size_t i = 0; i < count; ++i) {
                 ASSERT_EQ(sorted[i].primitive, expected[i].primitive) << count << " references, axis " << axis << ", " << i;
                 ASSERT_EQ(sorted[i].bounds, expected[i].bounds) << count << " references, axis " << axis << ", " << i;
@@ -199,11 +199,11 @@ TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
 TEST(ObjectSweep, ReadsTheNodeInPlaceOrFromTheDriversOrdersAlike) {
     for (const size_t count : {size_t(40), size_t(3000)}) {
         const std::vector<Reference> references = references_with_equal_keys(count, 9);
-        const ReferenceSummary summary = build::summarize(references);
+        const ReferenceSummary summary = builders::summarize(references);
         const Split none;
         CostModel cost;
         cost.overlap_penalty = 1.0f;
-        const build::ObjectSweepSplitFinder sweep;
+        const builders::ObjectSweepSplitFinder sweep;
         std::vector<Reference> node = references;
         const Split alone = sweep.find({node, summary, count, summary.bounds.area(), none}, cost);
         for (size_t i = 0; i < count; ++i) ASSERT_EQ(node[i].bounds, references[i].bounds) << "reordered at " << i;
@@ -211,9 +211,9 @@ TEST(ObjectSweep, ReadsTheNodeInPlaceOrFromTheDriversOrdersAlike) {
         std::array<std::vector<Reference>, 3> orders;
         for (int axis = 0; axis < 3; ++axis) {
             orders[axis] = references;
-            std::sort(orders[axis].begin(), orders[axis].end(), build::CentroidOrder{axis});
+            std::sort(orders[axis].begin(), orders[axis].end(), builders::CentroidOrder{axis});
         }
-        build::NodeContext context{node, summary, count, summary.bounds.area(), none};
+        builders::NodeContext context{node, summary, count, summary.bounds.area(), none};
         context.sorted = {orders[0], orders[1], orders[2]};
         const Split presorted = sweep.find(context, cost);
         ASSERT_TRUE(alone.is_valid());
@@ -229,20 +229,20 @@ TEST(ObjectSweep, ReadsTheNodeInPlaceOrFromTheDriversOrdersAlike) {
 
 // CheapestSplit: the lowest cost wins; of equal costs the lower axis, then the earlier offer.
 TEST(CheapestSplit, EqualCostsGoToTheLowerAxisWhateverTheOfferOrder) {
-    auto offer = [](build::CheapestSplit& sink, int axis, float cost, uint32_t tag) {
+    auto offer = [](builders::CheapestSplit& sink, int axis, float cost, uint32_t tag) {
         if (cost < sink.threshold(axis)) {
-            Split split = build::make_split(build::SplitKind::object_sorted, cost, axis, AABB{}, tag, AABB{}, 1);
+            Split split = builders::make_split(builders::SplitKind::object_sorted, cost, axis, AABB{}, tag, AABB{}, 1);
             sink.offer(split);
         }
     };
-    build::CheapestSplit later_axis_first;
+    builders::CheapestSplit later_axis_first;
     offer(later_axis_first, 2, 5.0f, 1);
     offer(later_axis_first, 0, 5.0f, 2);
     offer(later_axis_first, 0, 5.0f, 3);  // same axis, same cost, later: loses
     offer(later_axis_first, 1, 5.0f, 4);  // higher axis than the best: loses
     EXPECT_EQ(later_axis_first.best.axis, 0);
     EXPECT_EQ(later_axis_first.best.left_count, 2u);
-    build::CheapestSplit lower_axis_first;
+    builders::CheapestSplit lower_axis_first;
     offer(lower_axis_first, 0, 5.0f, 2);
     offer(lower_axis_first, 2, 5.0f, 1);
     EXPECT_EQ(lower_axis_first.best.axis, 0);
@@ -258,21 +258,21 @@ TEST(ApplySplit, SweepSplitKeepsTheOrder) {
     const CostModel cost;
     size_t checked = 0;
     for (TestNode& node : test_nodes()) {
-        const ReferenceSummary summary = build::summarize(node.references);
-        const build::ObjectSweepSplitFinder sweep;
+        const ReferenceSummary summary = builders::summarize(node.references);
+        const builders::ObjectSweepSplitFinder sweep;
         const Split none;
         for (int axis = 0; axis < 3; ++axis) {
             std::vector<Reference> storage = node.references;
             const Split split = sweep.find({storage, summary, storage.size(), summary.bounds.area(), none}, cost);
             if (!split.is_valid()) continue;
-            std::sort(storage.begin(), storage.end(), build::CentroidOrder{axis});
+            std::sort(storage.begin(), storage.end(), builders::CentroidOrder{axis});
             const std::vector<Reference> before = storage;
-            const build::ChildRanges children = build::apply_split(storage, uint32_t(storage.size()), split, node.scene->triangles);
+            const builders::ChildRanges children = builders::apply_split(storage, uint32_t(storage.size()), split, node.scene->triangles);
             ASSERT_EQ(children.left_count, split.left_count);
             ASSERT_EQ(children.left_count + children.right_count, before.size());
             std::vector<Reference> expected_left, expected_right;
             for (const Reference& reference : before)
-                (build::CentroidOrder{split.axis}(reference, split.tie) ? expected_left : expected_right).push_back(reference);
+                (builders::CentroidOrder{split.axis}(reference, split.tie) ? expected_left : expected_right).push_back(reference);
             const std::span<const Reference> left(storage.data(), children.left_count);
             const std::span<const Reference> right(storage.data() + children.left_capacity, children.right_count);
             auto same = [](std::span<const Reference> a, const std::vector<Reference>& b) {
@@ -282,8 +282,8 @@ TEST(ApplySplit, SweepSplitKeepsTheOrder) {
             };
             EXPECT_TRUE(same(left, expected_left)) << "axis " << axis;
             EXPECT_TRUE(same(right, expected_right)) << "axis " << axis;
-            EXPECT_TRUE(std::is_sorted(left.begin(), left.end(), build::CentroidOrder{axis}));
-            EXPECT_TRUE(std::is_sorted(right.begin(), right.end(), build::CentroidOrder{axis}));
+            EXPECT_TRUE(std::is_sorted(left.begin(), left.end(), builders::CentroidOrder{axis}));
+            EXPECT_TRUE(std::is_sorted(right.begin(), right.end(), builders::CentroidOrder{axis}));
             ++checked;
         }
     }
@@ -299,8 +299,8 @@ TEST(SplitSearch, CandidatesStartWithTheCheapestSplit) {
             cost.overlap_penalty = overlap_penalty;
             for (TestNode& node : test_nodes()) {
                 const auto spaces = every_search_space(*node.scene, gate_alpha);
-                const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
-                const ReferenceSummary summary = build::summarize(node.references);
+                const builders::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
+                const ReferenceSummary summary = builders::summarize(node.references);
                 std::vector<Reference> a = node.references, b = node.references;
                 const Split cheapest = search.cheapest(a, summary, a.size());
                 const std::vector<Split> candidates = search.candidates(b, summary, b.size(), 2);
@@ -326,8 +326,8 @@ TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
             for (TestNode& node : test_nodes()) {
                 const auto spaces = every_search_space(*node.scene, gate_alpha);
                 const float root_area = node.scene->bounds().area();
-                const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, root_area);
-                const ReferenceSummary summary = build::summarize(node.references);
+                const builders::SplitSearch search(cost, {}, spaces, node.scene->triangles, root_area);
+                const ReferenceSummary summary = builders::summarize(node.references);
                 std::vector<Reference> a = node.references, b = node.references;
                 const Split cheapest = search.cheapest(a, summary, a.size() * 2);
                 const std::vector<Split> per_space = search.cheapest_per_space(b, summary, b.size() * 2);
@@ -339,7 +339,7 @@ TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
                 Split best;
                 for (const auto& space : spaces) {
                     std::vector<Reference> c = node.references;
-                    const build::NodeContext context{c, summary, c.size() * 2, root_area, best, search.must_split(c.size())};
+                    const builders::NodeContext context{c, summary, c.size() * 2, root_area, best, search.must_split(c.size())};
                     const Split found = space->find(context, cost);
                     if (!found.is_valid()) continue;
                     if (found.cost < best.cost) best = found;
@@ -368,28 +368,28 @@ TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
 TEST(Lookahead, ToTheLeavesPricesOptionsByTheTreesTheDriverBuilds) {
     CostModel cost;
     cost.overlap_penalty = 1.0f;
-    const build::BuildLimits limits;
+    const builders::BuildLimits limits;
     size_t checked = 0;
     for (TestNode& node : test_nodes()) {
         const uint32_t count = uint32_t(node.references.size());
         if (count < 300) continue;
         SCOPED_TRACE(std::to_string(count) + " references");
         const size_t capacity = count + count / 4;
-        const ReferenceSummary summary = build::summarize(node.references);
+        const ReferenceSummary summary = builders::summarize(node.references);
         const double area = summary.bounds.area();
         const auto spaces = every_search_space(*node.scene);
-        const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
-        const build::Lookahead to_the_leaves(search, limits.max_depth, 0, nullptr);
+        const builders::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+        const builders::Lookahead to_the_leaves(search, limits.max_depth, 0, nullptr);
         std::vector<Reference> storage = node.references;
         storage.resize(capacity);
-        const build::LookaheadChoice choice = to_the_leaves.choose(storage, count, summary, 0);
+        const builders::LookaheadChoice choice = to_the_leaves.choose(storage, count, summary, 0);
         EXPECT_EQ(choice.options, spaces.size()) << "one option per search space (all offer a split here)";
         EXPECT_LE(choice.cost, choice.greedy_cost);
 
         auto driver_tree_sah = [&](float top_share) {
-            build::DriverOptions options;
+            builders::DriverOptions options;
             options.lookahead_top_share = top_share;
-            build::TopDownBuilder builder(cost, limits, every_search_space(*node.scene), node.scene->triangles, options);
+            builders::TopDownBuilder builder(cost, limits, every_search_space(*node.scene), node.scene->triangles, options);
             return tree_sah(builder.build(node.references, capacity), cost);
         };
         const double greedy_sah = driver_tree_sah(0.0f), looked_ahead_sah = driver_tree_sah(1.0f);
@@ -405,18 +405,18 @@ TEST(Lookahead, ToTheLeavesPricesOptionsByTheTreesTheDriverBuilds) {
 // pricing it to the leaves would build its whole subtree for nothing.
 TEST(Lookahead, SingleOptionIsTheGreedyDecisionUnpriced) {
     const CostModel cost;
-    const build::BuildLimits limits;
+    const builders::BuildLimits limits;
     size_t checked = 0;
     for (TestNode& node : test_nodes()) {
         const uint32_t count = uint32_t(node.references.size());
         if (!(count > limits.max_leaf_size)) continue;
-        std::vector<std::unique_ptr<build::SplitFinder>> spaces;
-        spaces.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
-        const ReferenceSummary summary = build::summarize(node.references);
-        const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+        std::vector<std::unique_ptr<builders::SplitFinder>> spaces;
+        spaces.push_back(std::make_unique<builders::ObjectSweepSplitFinder>());
+        const ReferenceSummary summary = builders::summarize(node.references);
+        const builders::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
         std::vector<Reference> storage = node.references, expected_storage = node.references;
-        const build::LookaheadChoice choice =
-            build::Lookahead(search, limits.max_depth, 0, nullptr).choose(storage, count, summary, 0);
+        const builders::LookaheadChoice choice =
+            builders::Lookahead(search, limits.max_depth, 0, nullptr).choose(storage, count, summary, 0);
         const std::optional<Split> greedy = search.greedy_decision(expected_storage, summary, count);
         ASSERT_TRUE(greedy && choice.split);
         EXPECT_TRUE(same_split(*choice.split, *greedy)) << count << " references";
@@ -437,9 +437,9 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
     size_t non_greedy = 0, compared = 0;
     for (TestNode& node : test_nodes()) {
         const auto spaces = every_search_space(*node.scene);
-        const build::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
+        const builders::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
         const uint32_t count = uint32_t(node.references.size());
-        const ReferenceSummary summary = build::summarize(node.references);
+        const ReferenceSummary summary = builders::summarize(node.references);
         const size_t capacity = count + count / 4;  // room for spatial splits
         auto storage_of = [&] {
             std::vector<Reference> storage = node.references;
@@ -448,9 +448,9 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
         };
         for (uint32_t depth : {1u, 2u}) {
             SCOPED_TRACE(std::to_string(count) + " references, lookahead " + std::to_string(depth));
-            const build::Lookahead lookahead(search, depth, 2, nullptr);
+            const builders::Lookahead lookahead(search, depth, 2, nullptr);
             std::vector<Reference> storage = storage_of();
-            const build::LookaheadChoice choice = lookahead.choose(storage, count, summary, 0);
+            const builders::LookaheadChoice choice = lookahead.choose(storage, count, summary, 0);
             EXPECT_LE(choice.cost, choice.greedy_cost);
             EXPECT_GT(choice.options, 1u);
             non_greedy += !choice.greedy;
@@ -467,14 +467,14 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
             std::vector<Reference> manual = storage_of();
             std::optional<Split> greedy = search.greedy_decision(std::span(manual).first(count), summary, capacity);
             ASSERT_TRUE(greedy.has_value());  // these nodes are worth splitting at the root
-            const build::ChildRanges children = build::apply_split(manual, count, *greedy, node.scene->triangles);
+            const builders::ChildRanges children = builders::apply_split(manual, count, *greedy, node.scene->triangles);
             double expected = double(cost.traversal_cost) * summary.bounds.area();
             const std::pair<uint32_t, uint32_t> ranges[2] = {{0, children.left_count},
                                                              {children.left_capacity, children.right_count}};
             const uint32_t capacities[2] = {children.left_capacity, children.right_capacity};
             for (int side = 0; side < 2; ++side) {
                 std::span<Reference> child(manual.data() + ranges[side].first, ranges[side].second);
-                const ReferenceSummary child_summary = build::summarize(child);
+                const ReferenceSummary child_summary = builders::summarize(child);
                 const double area = child_summary.bounds.area();
                 double local = cost.leaf_cost(child.size()) * area;
                 if (child.size() > 1) {
@@ -554,7 +554,7 @@ struct TreeListing {
     bool operator==(const TreeListing&) const = default;
 };
 
-void list_greedy_tree(const build::SplitSearch& search, std::span<Reference> storage, uint32_t count,
+void list_greedy_tree(const builders::SplitSearch& search, std::span<Reference> storage, uint32_t count,
                       const ReferenceSummary& summary, uint32_t depth, TreeListing& listing, std::array<size_t, 3>& kinds) {
     listing.boxes.push_back(summary.bounds);
     auto leaf = [&] {
@@ -568,14 +568,14 @@ void list_greedy_tree(const build::SplitSearch& search, std::span<Reference> sto
     std::optional<Split> split = search.greedy_decision(storage.first(count), summary, storage.size());
     if (!split) return leaf();
     search.order_for_apply(storage.first(count));
-    const std::optional<build::ChildRanges> children = search.apply(storage, count, *split, summary);
+    const std::optional<builders::ChildRanges> children = search.apply(storage, count, *split, summary);
     if (!children) return leaf();
-    kinds[split->kind == build::SplitKind::spatial ? 2 : split->kind == build::SplitKind::object_binned ? 1 : 0]++;
+    kinds[split->kind == builders::SplitKind::spatial ? 2 : split->kind == builders::SplitKind::object_binned ? 1 : 0]++;
     const std::span<Reference> left = storage.first(children->left_capacity);
     const std::span<Reference> right = storage.subspan(children->left_capacity, children->right_capacity);
-    list_greedy_tree(search, left, children->left_count, build::summarize(left.first(children->left_count)), depth + 1,
+    list_greedy_tree(search, left, children->left_count, builders::summarize(left.first(children->left_count)), depth + 1,
                      listing, kinds);
-    list_greedy_tree(search, right, children->right_count, build::summarize(right.first(children->right_count)),
+    list_greedy_tree(search, right, children->right_count, builders::summarize(right.first(children->right_count)),
                      depth + 1, listing, kinds);
 }
 
@@ -601,7 +601,7 @@ void list_bvh(const Bvh& bvh, uint32_t index, TreeListing& listing) {
 TEST(TopDownBuilder, CentroidOrdersGiveTheTreesOfTheGreedyStepThatSortsItself) {
     CostModel cost;
     cost.overlap_penalty = 1.0f;
-    const build::BuildLimits limits;
+    const builders::BuildLimits limits;
     std::array<size_t, 3> kinds{};  // splits taken: sweep, binned object, spatial
     size_t checked = 0;
     for (TestNode& node : test_nodes()) {
@@ -618,15 +618,15 @@ TEST(TopDownBuilder, CentroidOrdersGiveTheTreesOfTheGreedyStepThatSortsItself) {
             for (const uint32_t capacity : {count, count + count / 50, 2 * count}) {
                 SCOPED_TRACE(std::to_string(count) + " references, capacity " + std::to_string(capacity) +
                              (binned_first ? ", binned first" : ""));
-                const ReferenceSummary summary = build::summarize(node.references);
+                const ReferenceSummary summary = builders::summarize(node.references);
                 const auto spaces = search_spaces();
-                const build::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
+                const builders::SplitSearch search(cost, limits, spaces, node.scene->triangles, summary.bounds.area());
                 ASSERT_TRUE(search.reads_centroid_orders());
                 std::vector<Reference> storage = node.references;
                 storage.resize(capacity);
                 TreeListing expected, built;
                 list_greedy_tree(search, storage, count, summary, 0, expected, kinds);
-                build::TopDownBuilder builder(cost, limits, search_spaces(), node.scene->triangles, {});
+                builders::TopDownBuilder builder(cost, limits, search_spaces(), node.scene->triangles, {});
                 list_bvh(builder.build(node.references, capacity), 0, built);
                 EXPECT_EQ(built.boxes.size(), expected.boxes.size());
                 EXPECT_TRUE(built == expected);

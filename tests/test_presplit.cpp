@@ -1,4 +1,4 @@
-// Pre-splitting passes (src/build/presplit.hpp): early split clipping (Ernst & Greiner 2007) and the
+// Pre-splitting passes (src/builders/presplit.hpp): early split clipping (Ernst & Greiner 2007) and the
 // edge volume heuristic (Dammertz & Keller 2008). Budget, one reference per triangle at least,
 // containment, coverage (random barycentric samples), splitting of long thin triangles, determinism
 // across thread counts, and trees built over the references answering like the exact arbiter.
@@ -18,17 +18,17 @@
 #include <string>
 #include <vector>
 
-#include "build/object_sweep_split_finder.hpp"
-#include "build/presplit.hpp"
-#include "build/top_down_builder.hpp"
+#include "builders/object_sweep_split_finder.hpp"
+#include "builders/presplit.hpp"
+#include "builders/top_down_builder.hpp"
 #include "spacebvh/rays.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
 #include "spacebvh/verify.hpp"
 
 using namespace spacebvh;
-using build::PresplitOptions;
-using build::Reference;
+using builders::PresplitOptions;
+using builders::Reference;
 
 namespace {
 
@@ -40,8 +40,8 @@ struct Method {
 };
 
 const Method kMethods[] = {
-    {"esc", [](const Scene& s, const PresplitOptions& o) { return build::early_split_clipping(s, o); }},
-    {"evh", [](const Scene& s, const PresplitOptions& o) { return build::edge_volume_heuristic(s, o); }},
+    {"esc", [](const Scene& s, const PresplitOptions& o) { return builders::early_split_clipping(s, o); }},
+    {"evh", [](const Scene& s, const PresplitOptions& o) { return builders::edge_volume_heuristic(s, o); }},
 };
 
 const Scene& cached_scene(const std::string& name) {
@@ -253,9 +253,9 @@ TEST_P(PerMethod, ObjectSweepTreeOverReferencesTracesCorrectly) {
         PresplitOptions options;
         std::vector<Reference> refs = method().run(scene, options);
         const size_t count = refs.size();
-        std::vector<std::unique_ptr<build::SplitFinder>> spaces;
-        spaces.push_back(std::make_unique<build::ObjectSweepSplitFinder>());
-        build::TopDownBuilder builder(CostModel{}, build::BuildLimits{}, std::move(spaces), scene.triangles);
+        std::vector<std::unique_ptr<builders::SplitFinder>> spaces;
+        spaces.push_back(std::make_unique<builders::ObjectSweepSplitFinder>());
+        builders::TopDownBuilder builder(CostModel{}, builders::BuildLimits{}, std::move(spaces), scene.triangles);
         Bvh bvh = builder.build(std::move(refs), count);
         bvh.builder = method().name;
         ASSERT_FALSE(bvh.empty());

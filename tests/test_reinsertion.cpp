@@ -1,4 +1,4 @@
-// The reinsertion optimiser (src/build/reinsertion_optimizer.hpp, BuildOptions::reinsertion_iterations,
+// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, BuildOptions::reinsertion_iterations,
 // optimize_bvh): the tree SAH never rises and falls where there is something to gain, the gains are
 // priced exactly, the trees stay valid (depth cap included) and answer like the arbiter, the result
 // does not depend on the thread count, and bad options, tiny trees and cancellation are handled.
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "build/reinsertion_optimizer.hpp"
+#include "builders/reinsertion_optimizer.hpp"
 #include "embree/embree_builder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
@@ -97,9 +97,9 @@ TEST(Reinsertion, GainsArePricedExactly) {
     Bvh bvh = build_bvh(scene, options);
     const double sah_before = tree_sah(bvh, options.cost);
     const AABB root_box = bvh.root().bounds;
-    build::ReinsertionOptions reinsertion;
+    builders::ReinsertionOptions reinsertion;
     reinsertion.iterations = kDefaultReinsertionIterations;
-    const build::ReinsertionReport report = build::optimize_by_reinsertion(bvh, reinsertion);
+    const builders::ReinsertionReport report = builders::optimize_by_reinsertion(bvh, reinsertion);
     EXPECT_GT(report.moves, 10u);
     EXPECT_GE(report.iterations, 2u);
     EXPECT_EQ(bvh.root().bounds, root_box);

@@ -1,4 +1,4 @@
-// The exact sweep-plane spatial search space (src/build/spatial_sweep_split_finder.hpp) against brute
+// The exact sweep-plane spatial search space (src/builders/spatial_sweep_split_finder.hpp) against brute
 // force, its clipping edge cases, and the partition rule for straddlers when the budget is spent.
 #include <gtest/gtest.h>
 
@@ -6,13 +6,13 @@
 #include <random>
 #include <vector>
 
-#include "build/partition.hpp"
-#include "build/spatial_split.hpp"
-#include "build/spatial_sweep_split_finder.hpp"
+#include "builders/partition.hpp"
+#include "builders/spatial_split.hpp"
+#include "builders/spatial_sweep_split_finder.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
 
-namespace spacebvh::build {
+namespace spacebvh::builders {
 namespace {
 
 // Brute force for one plane: apply the split with the partition code (every straddler clipped into
@@ -208,4 +208,4 @@ TEST(SpatialSweep, InteriorSamplesAreValidated) {
 }
 
 }  // namespace
-}  // namespace spacebvh::build
+}  // namespace spacebvh::builders

@@ -19,7 +19,7 @@
 #include <string_view>
 #include <vector>
 
-#include "build/reference.hpp"
+#include "builders/reference.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/clip.hpp"
 #include "spacebvh/rays.hpp"
@@ -62,14 +62,14 @@ inline Scene two_floors() {
 // and their summary.
 struct SmallNode {
     std::vector<Triangle> triangles;
-    std::vector<build::Reference> references;
-    build::ReferenceSummary summary;
+    std::vector<builders::Reference> references;
+    builders::ReferenceSummary summary;
 };
 inline SmallNode small_node(std::vector<Triangle> triangles) {
     SmallNode node;
     node.triangles = std::move(triangles);
     for (uint32_t i = 0; i < node.triangles.size(); ++i) node.references.push_back({node.triangles[i].bounds(), i});
-    node.summary = build::summarize(node.references);
+    node.summary = builders::summarize(node.references);
     return node;
 }
 

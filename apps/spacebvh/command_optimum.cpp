@@ -1,13 +1,13 @@
 // spacebvh optimum [SCENE]: how far each search space's best local split is from the exhaustive
-// optimum (all 2^N partitions; src/build/exhaustive_split.hpp) on random small nodes and on small
+// optimum (all 2^N partitions; src/builders/exhaustive_split.hpp) on random small nodes and on small
 // nodes sampled from a scene's cbvh tree. The slides' example: CBVH ~700 against the optimum ~100.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 
-#include "build/exhaustive_split.hpp"
-#include "build/search_spaces.hpp"
+#include "builders/exhaustive_split.hpp"
+#include "builders/search_spaces.hpp"
 #include "cli_common.hpp"
 
 namespace spacebvh::cli {
@@ -89,10 +89,10 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
     double optimum_sum = 0, leaf_sum = 0;
     size_t feasible = 0;
     for (const TriangleSet& set : sets) {
-        std::vector<build::Reference> references;
+        std::vector<builders::Reference> references;
         for (uint32_t i = 0; i < set.size(); ++i) references.push_back({set[i].bounds(), i});
-        const build::ReferenceSummary summary = build::summarize(references);
-        const build::ExhaustiveSplit optimum = build::exhaustive_split(references, summary.bounds, base.cost);
+        const builders::ReferenceSummary summary = builders::summarize(references);
+        const builders::ExhaustiveSplit optimum = builders::exhaustive_split(references, summary.bounds, base.cost);
         if (!(optimum.cost < kInfinity)) continue;
         ++feasible;
         optimum_sum += optimum.cost;
@@ -100,12 +100,12 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
         for (Row& row : rows) {
             BuildOptions options = base;
             options.grid_splitting = row.grid_splitting;
-            const auto finders = build::make_search_spaces(row.search_spaces, set, options, false, 0.0f);
-            build::Split best;
+            const auto finders = builders::make_search_spaces(row.search_spaces, set, options, false, 0.0f);
+            builders::Split best;
             for (const auto& finder : finders) {
                 // Splitting search spaces get room for every reference to be clipped once.
-                const build::NodeContext context{references, summary, 2 * references.size(), summary.bounds.area(), best};
-                const build::Split split = finder->find(context, base.cost);
+                const builders::NodeContext context{references, summary, 2 * references.size(), summary.bounds.area(), best};
+                const builders::Split split = finder->find(context, base.cost);
                 if (split.cost < best.cost) best = split;
             }
             if (!(best.cost < kInfinity)) {
@@ -160,7 +160,7 @@ void add_optimum_command(CLI::App& app) {
     command->add_option("--nodes", options->nodes, "nodes per set")->capture_default_str();
     command->add_option("--min-refs", options->min_size, "smallest node")->capture_default_str();
     command->add_option("--max-refs", options->max_size,
-                        "largest node (at most " + std::to_string(build::kMaxExhaustiveReferences) + ")")
+                        "largest node (at most " + std::to_string(builders::kMaxExhaustiveReferences) + ")")
         ->capture_default_str();
     command->add_option("--seed", options->seed, "seed of the random nodes")->capture_default_str();
     options->scene.add_to(*command);
@@ -169,9 +169,9 @@ void add_optimum_command(CLI::App& app) {
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         if (options->min_size < 2 || options->max_size < options->min_size ||
-            options->max_size > build::kMaxExhaustiveReferences)
+            options->max_size > builders::kMaxExhaustiveReferences)
             throw Error("--min-refs and --max-refs must satisfy 2 <= min <= max <= " +
-                        std::to_string(build::kMaxExhaustiveReferences));
+                        std::to_string(builders::kMaxExhaustiveReferences));
         const BuildOptions base = options->build.options("cbvh");
         std::printf("Best local split cost of each search space / the exhaustive optimum over all partitions\n");
         std::printf("(x = ratio; * = clips references, so it may go below the partition optimum; grid G = ceil(%g N^(1/6)) <= %u)\n",

@@ -93,7 +93,7 @@ struct BuildOptions {
     bool grid_splitting = true;
     // Recursive cost evaluation (Popov et al. 2009, "use recursive cost evaluation"): choose each
     // node's split among the search spaces' best candidates by the SAH of the subtree built greedily
-    // this many levels below the node (src/build/lookahead.hpp). 0 = the greedy local choice.
+    // this many levels below the node (src/builders/lookahead.hpp). 0 = the greedy local choice.
     uint32_t lookahead_depth = 0;
     // The candidates it compares: this many of the cheapest splits per axis and search space (1..16).
     uint32_t lookahead_candidates = 2;
@@ -110,7 +110,7 @@ struct BuildOptions {
     // Off by default: measured not to pay for its build time (bench/SWEEP_RESULTS.md).
     bool exact_spatial_sweep = false;
     // Exact sweep: positions sampled inside the intervals next to the best event planes (0..64;
-    // 0 = event planes only). See src/build/spatial_sweep_split_finder.hpp.
+    // 0 = event planes only). See src/builders/spatial_sweep_split_finder.hpp.
     uint32_t sweep_interior_samples = 0;
     // After the build, optimise the tree by subtree reinsertion (Bittner et al. 2013; see
     // optimize_bvh): at most this many iterations, each moving a batch of subtrees to places that

@@ -1,0 +1,24 @@
+// The one place that turns a set of search spaces (SearchSpace bits) into split finders, for every
+// preset, the --search option and the optimum report.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "builders/split.hpp"
+#include "spacebvh/bvh.hpp"
+
+namespace spacebvh::builders {
+
+// Object spaces come first (the spatial gate looks at the best object split), then spatial, then grid;
+// on equal cost the earlier finder's split is kept. `allow_unsplitting` and `spatial_gate_alpha` are
+// the preset's rules for the spatial search space.
+std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t search_spaces, std::span<const Triangle> triangles,
+                                                             const BuildOptions& options, bool allow_unsplitting,
+                                                             float spatial_gate_alpha);
+
+// True when the search spaces may clip references into both children (so the reference budget applies).
+bool splits_references(uint32_t search_spaces, const BuildOptions& options);
+
+}  // namespace spacebvh::builders
