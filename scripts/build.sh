@@ -7,7 +7,10 @@ native=ON
 [ "${SPACEBVH_PORTABLE:-0}" = "1" ] && native=OFF
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
+# ccache, when present, shares compiled objects between checkouts and rebuilds.
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 # The Python module is built for the python3 on PATH (the one scripts/install-deps.sh prepared).
-cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=$native \
+cmake -S . -B build "${generator[@]}" "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=$native \
   -DPython3_EXECUTABLE="$(command -v python3)" >/dev/null
 cmake --build build -j "$(nproc)"
