@@ -17,17 +17,19 @@
 #include <string>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/render.hpp"
-#include "spacebvh/scene.hpp"
-#include "spacebvh/tracer.hpp"
-#include "embree/embree_builder.hpp"
-#include "embree/embree_scene.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/render.hpp"
+#include "spacebvh/tools/scene.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/embree_builder.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
 
 namespace py = pybind11;
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 
@@ -98,34 +100,34 @@ struct PyTracer {
     int threads = 0;
 };
 
-PyBvh build(std::shared_ptr<Scene> scene, const std::string& builder, std::optional<float> overlap_penalty,
+PyBvh build_tree(std::shared_ptr<Scene> scene, const std::string& builder, std::optional<float> overlap_penalty,
             float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
-            float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
+                 float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
             std::optional<float> spatial_gate, float lookahead_top, uint32_t optimize, int threads) {
     // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
     // optimiser apply to them, our search options do not.
     const bool embree_tree = is_embree_tree(builder);
     if (embree_tree && (!search.empty() || spatial_gate || lookahead_top != 0.0f))
         throw Error("search, spatial_gate and lookahead_top apply to our builders, not to Embree's tree '" + builder + "'");
-    BuildOptions options = options_for(embree_tree ? "binned" : builder);
+    BuildConfig options = config_for(embree_tree ? "binned" : builder);
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
-    options.object_bins = object_bins;
-    options.spatial_bins = spatial_bins;
-    if (spatial_gate) options.spatial_gate_alpha = *spatial_gate;
+    options.object.bins = object_bins;
+    options.spatial.bins = spatial_bins;
+    if (spatial_gate) options.spatial.gate_alpha = *spatial_gate;
     if (overlap_penalty) options.cost.overlap_penalty = *overlap_penalty;
     options.cost.traversal_cost = traversal_cost;
     options.cost.intersection_cost = intersection_cost;
     options.cost.leaf_block = leaf_block;
-    options.max_leaf_size = max_leaf_size;
-    options.reference_budget = reference_budget;
-    options.lookahead_top_share = lookahead_top;
-    options.reinsertion_iterations = optimize;
+    options.limits.max_leaf_size = max_leaf_size;
+    options.limits.reference_budget = reference_budget;
+    options.lookahead.top_share = lookahead_top;
+    options.reinsertion.iterations = optimize;
     options.validate();
     auto bvh = std::make_shared<Bvh>();
     {
         py::gil_scoped_release unlocked;
         in_arena(threads, [&] {
-            *bvh = embree_tree ? build_embree_tree(*scene, builder, options) : build_bvh(*scene, options);
+            *bvh = embree_tree ? build_embree_tree(*scene, builder, options) : spacebvh::build(*scene, options);
         });
     }
     return {std::move(scene), std::move(bvh)};
@@ -395,7 +397,7 @@ PYBIND11_MODULE(spacebvh, m) {
         .def("stats", &stats_of, py::arg("epo") = false,
              "Structure, memory and tree SAH (and EPO, the slow one, with epo=True) as a dict.");
 
-    m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
+    m.def("build", &build_tree, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
           py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,
           py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u, py::arg("reference_budget") = 1.3f,
           py::arg("search") = "", py::arg("object_bins") = 32u, py::arg("spatial_bins") = 32u,

@@ -12,11 +12,14 @@
 #include "builders/object_sweep_split_finder.hpp"
 #include "builders/partition.hpp"
 #include "builders/spatial_split.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 
 namespace spacebvh::builders {
+
+using namespace spacebvh::tools;
 namespace {
 
 using Node = testing_support::SmallNode;
@@ -158,18 +161,18 @@ TEST(BinnedSpatial, SearchIsSkippedWithoutSpareCapacityWhenAnObjectSplitIsOffere
 // split beats a leaf (a few); 0 searches them everywhere. Absurd values are refused.
 TEST(BinnedSpatial, GateAlphaOptionControlsTheSpatialSearch) {
     const Scene& scene = testing_support::cached_builtin_scene("interior");
-    BuildOptions options = options_for("spatial");
-    const size_t by_default = build_bvh(scene, options).primitives.size();
-    options.spatial_gate_alpha = 0.0f;
-    const size_t ungated = build_bvh(scene, options).primitives.size();
-    options.spatial_gate_alpha = 1.0f;
-    const size_t gated = build_bvh(scene, options).primitives.size();
+    BuildConfig options = config_for("spatial");
+    const size_t by_default = spacebvh::build(scene, options).primitives.size();
+    options.spatial.gate_alpha = 0.0f;
+    const size_t ungated = spacebvh::build(scene, options).primitives.size();
+    options.spatial.gate_alpha = 1.0f;
+    const size_t gated = spacebvh::build(scene, options).primitives.size();
     EXPECT_GT(by_default, scene.triangles.size());
     EXPECT_LE(by_default, ungated);
     EXPECT_LT(gated, scene.triangles.size() + (ungated - scene.triangles.size()) / 4) << gated << " " << ungated;
     for (float absurd : {2.0f, kInfinity, std::numeric_limits<float>::quiet_NaN()}) {
-        options.spatial_gate_alpha = absurd;
-        EXPECT_THROW(build_bvh(scene, options), Error) << absurd;
+        options.spatial.gate_alpha = absurd;
+        EXPECT_THROW(spacebvh::build(scene, options), Error) << absurd;
     }
 }
 

@@ -23,16 +23,18 @@
 #include <tuple>
 #include <vector>
 
-#include "embree/embree_scene.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/clip.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 
@@ -119,7 +121,7 @@ const SceneCase& scene_case(const std::string& name) {
 
 // Our answers on the case's rays against Embree's; every disagreement goes to the arbiter. Expects
 // none of ours wrong and reports Embree's wrong count.
-void expect_agrees_with_embree(const SceneCase& c, const BinaryTracer& tracer, const std::string& label) {
+void expect_agrees_with_embree(const SceneCase& c, const Tracer& tracer, const std::string& label) {
     for (int k = 0; k < 3; ++k) {
         SCOPED_TRACE(label + ", " + kKindNames[k] + " rays");
         const auto& rays = c.rays[k];
@@ -167,12 +169,12 @@ std::string builder_scene_name(const ::testing::TestParamInfo<std::tuple<std::st
 // slow builders build each scene only twice.) "NAME+opt": the tree optimised by reinsertion.
 TEST_P(BuilderOnScene, TreeIsValidAgreesWithEmbreeAndIsDeterministic) {
     const SceneCase& c = scene_case(scene_name());
-    const BuildOptions options = options_for_tree(builder());
+    const BuildConfig options = options_for_tree(builder());
     const Bvh bvh = build_in_arena(2, c.scene, options);
     EXPECT_EQ(bvh.builder, builder());
     uint32_t depth = 0;
     EXPECT_EQ(tree_violations(c.scene, bvh, options, &depth), "");
-    if (partitions_objects(options.builder)) {
+    if (partitions_objects(to_string(options.preset))) {
         EXPECT_EQ(loose_boxes(c.scene, bvh), "");
     }
     EXPECT_GT(depth, 5u);  // tens of thousands of triangles need a real tree
@@ -181,7 +183,7 @@ TEST_P(BuilderOnScene, TreeIsValidAgreesWithEmbreeAndIsDeterministic) {
     EXPECT_EQ(stats.max_depth, depth);
 
     {
-        const BinaryTracer tracer(c.scene, bvh);
+        const Tracer tracer(c.scene, bvh, Kernel::binary);
         expect_agrees_with_embree(c, tracer, builder() + "_" + scene_name());
     }
 
@@ -204,7 +206,7 @@ INSTANTIATE_TEST_SUITE_P(Optimized, BuilderOnScene,
                                            std::make_tuple("spatial+opt", "interior-rotated")),
                          builder_scene_name);
 
-// The exact spatial sweep (BuildOptions::exact_spatial_sweep) in the presets with spatial search:
+// The exact spatial sweep (BuildConfig::exact_spatial_sweep) in the presets with spatial search:
 // valid trees, answers equal to the arbiter's, the same tree with 1 and 2 threads.
 TEST(ExactSpatialSweep, TreesAreValidAnswerLikeTheArbiterAndAreDeterministic) {
     for (const char* scene_name : {"soup", "interior"}) {
@@ -212,12 +214,12 @@ TEST(ExactSpatialSweep, TreesAreValidAnswerLikeTheArbiterAndAreDeterministic) {
         const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 300, 1);
         for (const char* builder : {"kdbvh", "spatial"}) {
             SCOPED_TRACE(std::string(builder) + " on " + scene_name);
-            BuildOptions options = options_for(builder);
-            options.exact_spatial_sweep = true;
+            BuildConfig options = config_for(builder);
+            options.spatial.exact_sweep = true;
             const Bvh bvh = build_in_arena(2, scene, options);
             EXPECT_EQ(tree_violations(scene, bvh, options), "");
             EXPECT_EQ(first_difference(build_in_arena(1, scene, options), bvh), "") << "1 vs 2 threads";
-            EXPECT_EQ(wrong_against_arbiter(scene, BinaryTracer(scene, bvh), rays), "");
+            EXPECT_EQ(wrong_against_arbiter(scene, Tracer(scene, bvh, Kernel::binary), rays), "");
         }
     }
 }
@@ -235,9 +237,9 @@ std::string plain_name(const ::testing::TestParamInfo<std::string>& info) { retu
 // The exact sweep (cbvh) never gives a worse tree SAH than the binned approximation.
 TEST_P(PerBuiltinScene, CbvhTreeSahIsAtMostBinned) {
     const Scene& scene = builtin(GetParam());
-    const BuildOptions sweep = options_for("cbvh"), binned = options_for("binned");
-    const double sah_cbvh = tree_sah(build_bvh(scene, sweep), sweep.cost);
-    const double sah_binned = tree_sah(build_bvh(scene, binned), binned.cost);
+    const BuildConfig sweep = config_for("cbvh"), binned = config_for("binned");
+    const double sah_cbvh = tree_sah(spacebvh::build(scene, sweep), sweep.cost);
+    const double sah_binned = tree_sah(spacebvh::build(scene, binned), binned.cost);
     RecordProperty("sah_cbvh", std::to_string(sah_cbvh));
     RecordProperty("sah_binned", std::to_string(sah_binned));
     EXPECT_GT(sah_cbvh, 0.0);
@@ -249,8 +251,8 @@ INSTANTIATE_TEST_SUITE_P(Builtin, PerBuiltinScene, ::testing::ValuesIn(builtin_s
 // Brute force (no Embree): our answers equal the arbiter's on 300 rays of each kind on the soup.
 TEST_P(PerBuilder, AnswersEqualTheArbiterOnTheSoup) {
     const Scene& scene = builtin("soup");
-    const Bvh bvh = build_bvh(scene, options_for(GetParam()));
-    const BinaryTracer tracer(scene, bvh);
+    const Bvh bvh = spacebvh::build(scene, config_for(GetParam()));
+    const Tracer tracer(scene, bvh, Kernel::binary);
     const std::vector<Ray> random = generate_random_rays(scene.bounds(), 300, 1);
     // 20 x 15 = 300 primary rays.
     const std::vector<Ray> primary = generate_primary_rays(camera_for_scene(scene, "builtin:soup", {}), 20, 15);
@@ -320,19 +322,19 @@ TEST_P(PerBuilder, SmallScenesWithManyOptionsMatchTheArbiter) {
     for (const size_t count : {1, 2, 3, 9, 40, 150, 700}) {
         for (const Variant& v : variants) {
             const Scene scene = small_random_scene(++seed, count);
-            BuildOptions options = options_for(GetParam());
-            options.max_leaf_size = v.max_leaf;
-            options.max_depth = v.max_depth;
-            options.object_bins = v.bins;
+            BuildConfig options = config_for(GetParam());
+            options.limits.max_leaf_size = v.max_leaf;
+            options.limits.max_depth = v.max_depth;
+            options.object.bins = v.bins;
             options.cost.overlap_penalty = v.c_o;
             options.cost.leaf_block = v.leaf_block;
             SCOPED_TRACE(scene.name + " (" + std::to_string(scene.triangles.size()) + " triangles), max leaf " +
                          std::to_string(v.max_leaf) + ", max depth " + std::to_string(v.max_depth) + ", bins " +
                          std::to_string(v.bins) + ", C_o " + std::to_string(v.c_o) + ", leaf block " +
                          std::to_string(v.leaf_block));
-            const Bvh bvh = build_bvh(scene, options);
+            const Bvh bvh = spacebvh::build(scene, options);
             ASSERT_EQ(tree_violations(scene, bvh, options), "");
-            const BinaryTracer tracer(scene, bvh);
+            const Tracer tracer(scene, bvh, Kernel::binary);
             EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 300, seed)), "");
         }
     }
@@ -342,12 +344,12 @@ TEST_P(PerBuilder, SmallScenesWithManyOptionsMatchTheArbiter) {
 TEST_P(PerBuilder, MaxLeafSizeIsRespected) {
     const Scene scene = soup_prefix(6000);
     for (uint32_t max_leaf : {1u, 3u, 16u}) {
-        BuildOptions options = options_for(GetParam());
-        options.max_leaf_size = max_leaf;
-        const Bvh bvh = build_bvh(scene, options);
+        BuildConfig options = config_for(GetParam());
+        options.limits.max_leaf_size = max_leaf;
+        const Bvh bvh = spacebvh::build(scene, options);
         uint32_t depth = 0;
         EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "") << "max leaf " << max_leaf;
-        EXPECT_LT(depth, options.max_depth);
+        EXPECT_LT(depth, options.limits.max_depth);
         uint32_t largest = 0;
         for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
         EXPECT_LE(largest, max_leaf);
@@ -359,17 +361,17 @@ TEST_P(PerBuilder, MaxLeafSizeIsRespected) {
 TEST_P(PerBuilder, MaxDepthIsRespected) {
     const SceneCase& c = scene_case("interior");
     for (uint32_t max_depth : {1u, 4u, 10u}) {
-        BuildOptions options = options_for(GetParam());
-        options.max_depth = max_depth;
-        const Bvh bvh = build_bvh(c.scene, options);
+        BuildConfig options = config_for(GetParam());
+        options.limits.max_depth = max_depth;
+        const Bvh bvh = spacebvh::build(c.scene, options);
         uint32_t depth = 0;
         EXPECT_EQ(tree_violations(c.scene, bvh, options, &depth), "") << "max depth " << max_depth;
         EXPECT_EQ(depth, max_depth);
         uint32_t largest = 0;
         for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
-        EXPECT_GT(largest, options.max_leaf_size);
+        EXPECT_GT(largest, options.limits.max_leaf_size);
         if (max_depth == 1) { EXPECT_EQ(bvh.nodes.size(), 3u); }
-        if (max_depth == 10) expect_agrees_with_embree(c, BinaryTracer(c.scene, bvh), GetParam() + "_depth10");
+        if (max_depth == 10) expect_agrees_with_embree(c, Tracer(c.scene, bvh, Kernel::binary), GetParam() + "_depth10");
     }
 }
 
@@ -379,12 +381,12 @@ TEST_P(PerBuilder, MaxDepthIsRespected) {
 TEST_P(ObjectBuilder, InfiniteOverlapPenaltyBuildsValidCorrectTrees) {
     for (const char* name : {"soup", "interior-rotated"}) {
         const SceneCase& c = scene_case(name);
-        BuildOptions options = options_for(GetParam());
+        BuildConfig options = config_for(GetParam());
         options.cost.overlap_penalty = kInfinity;
-        const Bvh bvh = build_bvh(c.scene, options);
+        const Bvh bvh = spacebvh::build(c.scene, options);
         EXPECT_EQ(bvh.cost.overlap_penalty, kInfinity);
         EXPECT_EQ(tree_violations(c.scene, bvh, options), "") << name;
-        expect_agrees_with_embree(c, BinaryTracer(c.scene, bvh), GetParam() + "_" + name + "_co_inf");
+        expect_agrees_with_embree(c, Tracer(c.scene, bvh, Kernel::binary), GetParam() + "_" + name + "_co_inf");
     }
 }
 
@@ -393,14 +395,14 @@ TEST_P(PerBuilder, OneTriangleScene) {
     Scene scene;
     scene.name = "one";
     scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
-    const BuildOptions options = options_for(GetParam());
-    const Bvh bvh = build_bvh(scene, options);
+    const BuildConfig options = config_for(GetParam());
+    const Bvh bvh = spacebvh::build(scene, options);
     ASSERT_EQ(bvh.nodes.size(), 1u);
     EXPECT_TRUE(bvh.root().is_leaf());
     EXPECT_EQ(bvh.root().reference_count, 1u);
     EXPECT_EQ(bvh.primitives, std::vector<uint32_t>{0});
     EXPECT_EQ(bvh.root().bounds, scene.triangles[0].bounds());
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     Ray ray;
     ray.org = {0.25f, 0.25f, 2.0f};
     ray.dir = {0, 0, -1};
@@ -419,12 +421,12 @@ TEST_P(PerBuilder, IdenticalTrianglesAreSplitAndTraced) {
     scene.name = "identical";
     const Triangle t{{-1, -1, 3}, {2, -1, 3}, {-1, 2, 3}};
     scene.triangles.assign(100, t);
-    const BuildOptions options = options_for(GetParam());
-    const Bvh bvh = build_bvh(scene, options);
+    const BuildConfig options = config_for(GetParam());
+    const Bvh bvh = spacebvh::build(scene, options);
     uint32_t depth = 0;
     EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "");
     EXPECT_LE(depth, 10u);  // halving: about log2(100 / 8) + 1 levels
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 500, 3)), "");
     Ray ray;
     ray.org = {0, 0, 0};
@@ -449,10 +451,10 @@ TEST_P(PerBuilder, TrianglesWithOneCommonCentroidAreSplitAndTraced) {
         }
     }
     for (const Triangle& t : scene.triangles) ASSERT_EQ(t.bounds().center(), c);
-    const BuildOptions options = options_for(GetParam());
-    const Bvh bvh = build_bvh(scene, options);
+    const BuildConfig options = config_for(GetParam());
+    const Bvh bvh = spacebvh::build(scene, options);
     EXPECT_EQ(tree_violations(scene, bvh, options), "");
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 1000, 5)), "");
 }
 
@@ -466,50 +468,50 @@ TEST_P(PerBuilder, DegenerateOnlySceneBuildsAndIsNeverHit) {
         scene.triangles.push_back({{x, 1, 1}, {x, 1, 1}, {x, 1, 1}});                    // a point
         scene.triangles.push_back({{x, 2, 0}, {x + 1, 2.5f, 0}, {x + 1, 2.5f, 0}});      // repeated vertex
     }
-    const BuildOptions options = options_for(GetParam());
-    const Bvh bvh = build_bvh(scene, options);
+    const BuildConfig options = config_for(GetParam());
+    const Bvh bvh = spacebvh::build(scene, options);
     EXPECT_EQ(tree_violations(scene, bvh, options), "");
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     size_t hits = 0;
     for (const Ray& ray : probing_rays(scene, 500, 9)) hits += tracer.intersect(ray).is_hit() + tracer.occluded(ray);
     EXPECT_EQ(hits, 0u);
 }
 
 // Invalid options and an empty scene throw Error (never build).
-TEST(BuildOptions, InvalidOptionsAndEmptySceneThrow) {
+TEST(BuildConfig, InvalidOptionsAndEmptySceneThrow) {
     Scene scene;
     scene.name = "tiny";
     scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{2, 0, 0}, {3, 0, 0}, {2, 1, 0}}};
     auto with = [](auto change) {
-        BuildOptions options;
+        BuildConfig options;
         change(options);
         return options;
     };
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.builder = "no-such-builder"; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.builder = ""; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 1; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 0; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 257; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 100000; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_leaf_size = 0; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 0; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 1025; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.traversal_cost = -1.0f; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.intersection_cost = 0.0f; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.overlap_penalty = -1.0f; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.cost.overlap_penalty = std::nanf(""); })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.spatial_bins = 1; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.spatial_bins = 1025; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = 0.5f; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = 5.0f; })), Error);
-    EXPECT_THROW(build_bvh(scene, with([](BuildOptions& o) { o.reference_budget = std::nanf(""); })), Error);
-    EXPECT_THROW(options_for("no-such-builder"), Error);
-    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 2; })));
-    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.object_bins = 256; })));
-    EXPECT_NO_THROW(build_bvh(scene, with([](BuildOptions& o) { o.max_depth = 1024; })));
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.preset = Preset(99); })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.preset = Preset(8); })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 1; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 0; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 257; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 100000; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.max_leaf_size = 0; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.max_depth = 0; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.max_depth = 1025; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.cost.traversal_cost = -1.0f; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.cost.intersection_cost = 0.0f; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.cost.overlap_penalty = -1.0f; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.cost.overlap_penalty = std::nanf(""); })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.spatial.bins = 1; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.spatial.bins = 1025; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = 0.5f; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = 5.0f; })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = std::nanf(""); })), Error);
+    EXPECT_THROW(config_for("no-such-builder"), Error);
+    EXPECT_NO_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 2; })));
+    EXPECT_NO_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 256; })));
+    EXPECT_NO_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.max_depth = 1024; })));
 
     try {
-        build_bvh(scene, with([](BuildOptions& o) { o.builder = "nope"; }));
+        (void)config_for("nope");
         FAIL() << "no exception";
     } catch (const Error& e) {
         // The message names the bad builder and the known ones.
@@ -520,18 +522,18 @@ TEST(BuildOptions, InvalidOptionsAndEmptySceneThrow) {
 
     Scene empty;
     empty.name = "empty";
-    for (const std::string& name : builder_names()) EXPECT_THROW(build_bvh(empty, options_for(name)), Error) << name;
+    for (const std::string& name : builder_names()) EXPECT_THROW(spacebvh::build(empty, config_for(name)), Error) << name;
 }
 
 // Counting references in blocks of four makes leaves of up to four triangles as cheap as one: the
 // trees of every builder get fewer, fuller leaves than with the plain SAH, on the organic mesh.
-TEST(BuildOptions, LeafBlocksGiveFullerLeaves) {
+TEST(BuildConfig, LeafBlocksGiveFullerLeaves) {
     const Scene& scene = builtin("organic");
     for (const char* builder : {"cbvh", "binned", "spatial"}) {
-        BuildOptions options = options_for(builder);
+        BuildConfig options = config_for(builder);
         auto leaves = [&](uint32_t block) {
             options.cost.leaf_block = block;
-            const Bvh bvh = build_bvh(scene, options);
+            const Bvh bvh = spacebvh::build(scene, options);
             EXPECT_EQ(bvh.cost.leaf_block, block);
             size_t count = 0;
             for (const BvhNode& node : bvh.nodes) count += node.is_leaf();
@@ -543,7 +545,7 @@ TEST(BuildOptions, LeafBlocksGiveFullerLeaves) {
 }
 
 // builder_names() lists cbvh and binned, each with a description; the tree records builder and cost.
-TEST(BuildOptions, BuilderNamesDescriptionsAndRecordedSettings) {
+TEST(BuildConfig, BuilderNamesDescriptionsAndRecordedSettings) {
     const std::vector<std::string> names = builder_names();
     EXPECT_NE(std::find(names.begin(), names.end(), "cbvh"), names.end());
     EXPECT_NE(std::find(names.begin(), names.end(), "binned"), names.end());
@@ -553,10 +555,10 @@ TEST(BuildOptions, BuilderNamesDescriptionsAndRecordedSettings) {
     Scene scene;
     scene.name = "two";
     scene.triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{5, 0, 0}, {6, 0, 0}, {5, 1, 0}}};
-    BuildOptions options = options_for("cbvh");
+    BuildConfig options = config_for("cbvh");
     options.cost.traversal_cost = 0.5f;
     options.cost.overlap_penalty = 2.0f;
-    const Bvh bvh = build_bvh(scene, options);
+    const Bvh bvh = spacebvh::build(scene, options);
     EXPECT_EQ(bvh.builder, "cbvh");
     EXPECT_EQ(bvh.cost.traversal_cost, 0.5f);
     EXPECT_EQ(bvh.cost.overlap_penalty, 2.0f);
@@ -567,7 +569,7 @@ TEST(BuildOptions, BuilderNamesDescriptionsAndRecordedSettings) {
 // even more), give the same tree byte for byte as a 1-thread build.
 TEST_P(PerBuilder, RepeatedAndOversubscribedBuildsAreIdentical) {
     const Scene scene = soup_prefix(12000);
-    const BuildOptions options = options_for(GetParam());
+    const BuildConfig options = config_for(GetParam());
     const Bvh one = build_in_arena(1, scene, options);
     const Bvh two = build_in_arena(2, scene, options);
     const Bvh two_again = build_in_arena(2, scene, options);
@@ -581,10 +583,10 @@ TEST_P(PerBuilder, RepeatedAndOversubscribedBuildsAreIdentical) {
 // The progress callback reports fractions in [0, 1] and finishes with 1.
 TEST_P(PerBuilder, ProgressReportsFractionsUpToOne) {
     const Scene scene = soup_prefix(6000);
-    BuildOptions options = options_for(GetParam());
+    BuildConfig options = config_for(GetParam());
     ProgressLog log;
-    options.progress = log.callback();
-    build_bvh(scene, options);
+    options.hooks.progress = log.callback();
+    spacebvh::build(scene, options);
     EXPECT_EQ(log.problems(), "");
     EXPECT_GT(log.reports.size(), 2u);
 }
@@ -601,10 +603,10 @@ TEST_P(PerBuilder, VeryDeepTreesAreTracedCorrectly) {
         scene.triangles.push_back({{x, 0, 0}, {x + 0.5f, 0, 0}, {x + 1.0f, 0, 0}});
     }
     scene.triangles.push_back({{-2, -1, -1}, {-2, 1, -1}, {-2, 0, 1}});  // one real triangle at the far end
-    BuildOptions options = options_for(GetParam());
-    options.max_leaf_size = 1;
-    options.max_depth = 1024;
-    const Bvh bvh = build_bvh(scene, options);
+    BuildConfig options = config_for(GetParam());
+    options.limits.max_leaf_size = 1;
+    options.limits.max_depth = 1024;
+    const Bvh bvh = spacebvh::build(scene, options);
     uint32_t depth = 0;
     EXPECT_EQ(tree_violations(scene, bvh, options, &depth), "");
     RecordProperty("depth", std::to_string(depth));
@@ -612,7 +614,7 @@ TEST_P(PerBuilder, VeryDeepTreesAreTracedCorrectly) {
     if (GetParam() == "binned") {
         EXPECT_GT(depth, 128u) << "the scene no longer makes a deep tree";
     }
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     // Along the line of degenerate triangles (inside every node box) to the real triangle.
     Ray ray;
     ray.org = {20005.0f, 0.0f, 0.0f};
@@ -627,7 +629,7 @@ INSTANTIATE_TEST_SUITE_P(All, PerBuilder, ::testing::ValuesIn(builder_names()), 
 INSTANTIATE_TEST_SUITE_P(Object, ObjectBuilder, ::testing::Values("cbvh", "binned"), plain_name);
 
 // ---------------------------------------------------------------------------------------------------
-// Recursive cost evaluation (BuildOptions::lookahead_depth; the choice itself is tested in
+// Recursive cost evaluation (BuildConfig::lookahead_depth; the choice itself is tested in
 // test_lookahead.cpp): the trees it builds are valid, answer as the arbiter does, and are the same
 // byte for byte with 1 and 2 threads.
 
@@ -646,11 +648,11 @@ TEST_P(LookaheadBuilder, TreesAreValidCorrectAndDeterministic) {
     // cbvh: big enough for the parallel paths (subtrees and candidate pricing from 4096 references);
     // spatial (10x slower): clipping and the budget in the priced subtrees.
     const Scene scene = soup_prefix(builder == "cbvh" ? 6000 : 2000);
-    BuildOptions options = options_for(builder);
-    options.lookahead_depth = depth;
+    BuildConfig options = config_for(builder);
+    options.lookahead.depth = depth;
     const Bvh bvh = build_in_arena(2, scene, options);
     EXPECT_EQ(tree_violations(scene, bvh, options), "");
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     EXPECT_EQ(wrong_against_arbiter(scene, tracer, probing_rays(scene, 1500, 11)), "");
     EXPECT_EQ(first_difference(build_in_arena(1, scene, options), bvh), "") << "1 vs 2 threads";
     RecordProperty("sah", std::to_string(tree_sah(bvh, options.cost)));
@@ -661,30 +663,30 @@ INSTANTIATE_TEST_SUITE_P(Lookahead, LookaheadBuilder,
                                            std::make_tuple("spatial", 1u)),
                          lookahead_name);
 
-// Recursive cost evaluation to the leaves at the top of the tree (BuildOptions::lookahead_top_share;
+// Recursive cost evaluation to the leaves at the top of the tree (BuildConfig::lookahead_top_share;
 // the pricing is tested in test_lookahead.cpp): valid trees that answer as the arbiter does, the same
 // for 1 and 2 threads, and never above the greedy tree's SAH. On the interior (a room around dense
 // objects, as living_room_3) the greedy step's top choices are not the best: the SAH must drop.
 TEST(LookaheadTop, TreesAreValidCorrectDeterministicAndNoWorseThanGreedy) {
     const Scene soup = soup_prefix(6000);  // big enough for the parallel paths of the pricing (4096 references)
-    BuildOptions options = options_for("spatial");
-    options.lookahead_top_share = 0.1f;
+    BuildConfig options = config_for("spatial");
+    options.lookahead.top_share = 0.1f;
     const Bvh bvh = build_in_arena(2, soup, options);
     EXPECT_EQ(tree_violations(soup, bvh, options), "");
-    const BinaryTracer tracer(soup, bvh);
+    const Tracer tracer(soup, bvh, Kernel::binary);
     EXPECT_EQ(wrong_against_arbiter(soup, tracer, probing_rays(soup, 1500, 13)), "");
     EXPECT_EQ(first_difference(build_in_arena(1, soup, options), bvh), "") << "1 vs 2 threads";
 
     const Scene& interior = cached_builtin_scene("interior");
-    BuildOptions greedy = options_for("spatial");
-    const double greedy_sah = tree_sah(build_bvh(interior, greedy), greedy.cost);
-    const double looked_ahead_sah = tree_sah(build_bvh(interior, options), options.cost);
+    BuildConfig greedy = config_for("spatial");
+    const double greedy_sah = tree_sah(spacebvh::build(interior, greedy), greedy.cost);
+    const double looked_ahead_sah = tree_sah(spacebvh::build(interior, options), options.cost);
     EXPECT_LT(looked_ahead_sah, 0.99 * greedy_sah);
     RecordProperty("interior_sah", std::to_string(greedy_sah) + " -> " + std::to_string(looked_ahead_sah));
 
     // One search space (cbvh): nothing to choose between, the greedy tree.
-    BuildOptions object_only = options_for("cbvh");
-    const Bvh greedy_cbvh = build_bvh(soup, object_only);
-    object_only.lookahead_top_share = 0.1f;
-    EXPECT_EQ(first_difference(build_bvh(soup, object_only), greedy_cbvh), "");
+    BuildConfig object_only = config_for("cbvh");
+    const Bvh greedy_cbvh = spacebvh::build(soup, object_only);
+    object_only.lookahead.top_share = 0.1f;
+    EXPECT_EQ(first_difference(spacebvh::build(soup, object_only), greedy_cbvh), "");
 }

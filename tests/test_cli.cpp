@@ -21,12 +21,14 @@
 #include <string>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 namespace fs = std::filesystem;
 
 namespace {
@@ -225,7 +227,7 @@ TEST_F(Cli, BuildWritesConsistentJson) {
     EXPECT_NE(r.output.find("peak memory"), std::string::npos) << r.output;
     // The same tree built in-process gives the same node count.
     const Scene scene = load_scene("builtin:soup");
-    EXPECT_EQ(nodes, build_bvh(scene, options_for("cbvh")).nodes.size());
+    EXPECT_EQ(nodes, spacebvh::build(scene, config_for("cbvh")).nodes.size());
 }
 
 // The overlap penalty is reported as a number (or "inf"), not as the whole cost description.
@@ -275,7 +277,7 @@ TEST_F(Cli, RaysThenTraceMatchTheArbiter) {
     EXPECT_GT(hit_count, 20u);
 
     // All 1000 records equal the library's own answers with the default builder.
-    const BinaryTracer tracer(scene, build_bvh(scene, BuildOptions{}));
+    const Tracer tracer(scene, spacebvh::build(scene, BuildConfig{}), Kernel::binary);
     size_t different = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         const HitRecord mine = to_record(tracer.intersect(rays[i]));

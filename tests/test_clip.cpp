@@ -7,6 +7,7 @@
 #include "spacebvh/clip.hpp"
 
 namespace spacebvh {
+
 namespace {
 
 AABB box(Vec3 lo, Vec3 hi) { return {lo, hi}; }

@@ -6,12 +6,13 @@
 #include <string>
 #include <vector>
 
-#include "embree/embree_scene.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 

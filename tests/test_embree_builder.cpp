@@ -12,24 +12,25 @@
 #include <string>
 #include <vector>
 
-#include "embree/embree_builder.hpp"
-#include "embree/embree_scene.hpp"
+#include "spacebvh/tools/embree_builder.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 
 const char* kScenes[] = {"interior", "interior-rotated", "soup"};
 const EmbreeQuality kQualities[] = {EmbreeQuality::medium, EmbreeQuality::high};
 
-BuildOptions embree_options() {
-    BuildOptions options;  // max leaf 8, C_T = C_I = 1, as embree-measured.md
-    options.reference_budget = 1.2f;
+BuildConfig embree_options() {
+    BuildConfig options;  // max leaf 8, C_T = C_I = 1, as embree-measured.md
+    options.limits.reference_budget = 1.2f;
     return options;
 }
 
@@ -107,14 +108,14 @@ using testing_support::occlusion_records;
 }  // namespace
 
 TEST(EmbreeBuilder, TreesAreWellFormed) {
-    const BuildOptions options = embree_options();
+    const BuildConfig options = embree_options();
     for (const char* name : kScenes)
         for (EmbreeQuality quality : kQualities) {
             SCOPED_TRACE(std::string(name) + ", " + to_string(quality));
             const Scene& scene = builtin_scene(name);
             const Bvh& bvh = embree_tree(name, quality);
             EXPECT_EQ(bvh.builder, quality == EmbreeQuality::high ? "embree-high" : "embree-medium");
-            EXPECT_EQ(check_structure(scene, bvh, options.max_leaf_size, quality == EmbreeQuality::high), "");
+            EXPECT_EQ(check_structure(scene, bvh, options.limits.max_leaf_size, quality == EmbreeQuality::high), "");
             const size_t references = reference_count(bvh);
             EXPECT_GE(references, scene.triangles.size());
             if (quality == EmbreeQuality::medium) {
@@ -127,11 +128,11 @@ TEST(EmbreeBuilder, TreesAreWellFormed) {
 }
 
 TEST(EmbreeBuilder, HighSplitsWithinTheReferenceBudget) {
-    const BuildOptions options = embree_options();
+    const BuildConfig options = embree_options();
     for (const char* name : kScenes) {
         SCOPED_TRACE(name);
         const size_t triangles = builtin_scene(name).triangles.size();
-        const size_t budget = size_t(double(options.reference_budget) * double(triangles));
+        const size_t budget = size_t(double(options.limits.reference_budget) * double(triangles));
         EXPECT_LE(reference_count(embree_tree(name, EmbreeQuality::high)), budget);
     }
     // The rotated interior is full of long diagonal triangles: Embree does split there.
@@ -140,11 +141,11 @@ TEST(EmbreeBuilder, HighSplitsWithinTheReferenceBudget) {
 
     // A bigger budget is honoured too (and a budget of 1 allows no split at all).
     const Scene& rotated = builtin_scene("interior-rotated");
-    BuildOptions tight = options;
-    tight.reference_budget = 1.0f;
+    BuildConfig tight = options;
+    tight.limits.reference_budget = 1.0f;
     const Bvh unsplit = build_bvh_with_embree(rotated, EmbreeQuality::high, tight);
     EXPECT_EQ(reference_count(unsplit), rotated.triangles.size());
-    EXPECT_EQ(check_structure(rotated, unsplit, tight.max_leaf_size, true), "");
+    EXPECT_EQ(check_structure(rotated, unsplit, tight.limits.max_leaf_size, true), "");
 }
 
 TEST(EmbreeBuilder, OurTracerOverEmbreeTreesAgreesWithEmbree) {
@@ -153,7 +154,7 @@ TEST(EmbreeBuilder, OurTracerOverEmbreeTreesAgreesWithEmbree) {
         const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 10000, 1);
         for (EmbreeQuality quality : kQualities) {
             SCOPED_TRACE(std::string(name) + ", " + to_string(quality));
-            const BinaryTracer tracer(scene, embree_tree(name, quality));
+            const Tracer tracer(scene, embree_tree(name, quality), Kernel::binary);
             const EmbreeScene embree(scene, quality);
             std::vector<Hit> hits(rays.size());
             std::vector<uint8_t> occluded(rays.size());
@@ -192,15 +193,15 @@ TEST(EmbreeBuilder, SpatialSplitsLowerTheSahOnTheRotatedInterior) {
 
 TEST(EmbreeBuilder, OptionsAndErrors) {
     const Scene& scene = builtin_scene("soup");
-    BuildOptions options = embree_options();
+    BuildConfig options = embree_options();
 
     // Leaf size and costs reach Embree: leaves of at most 2, and the cost model is recorded.
-    options.max_leaf_size = 2;
+    options.limits.max_leaf_size = 2;
     options.cost.traversal_cost = 1.5f;
     double last_progress = -1.0;
     size_t progress_calls = 0;
     std::mutex mutex;
-    options.progress = [&](double f) {
+    options.hooks.progress = [&](double f) {
         std::lock_guard lock(mutex);
         ++progress_calls;
         last_progress = f;
@@ -212,24 +213,24 @@ TEST(EmbreeBuilder, OptionsAndErrors) {
     EXPECT_EQ(last_progress, 1.0);
 
     // An exception thrown by the progress callback cancels the build and comes back out.
-    BuildOptions throwing = embree_options();
-    throwing.progress = [](double) { throw std::runtime_error("stop"); };
+    BuildConfig throwing = embree_options();
+    throwing.hooks.progress = [](double) { throw std::runtime_error("stop"); };
     EXPECT_THROW(build_bvh_with_embree(scene, EmbreeQuality::medium, throwing), std::runtime_error);
 
     // The builder still works after a cancelled build.
     EXPECT_EQ(check_structure(scene, build_bvh_with_embree(scene, EmbreeQuality::medium, embree_options()),
-                              embree_options().max_leaf_size, false),
+                              embree_options().limits.max_leaf_size, false),
               "");
 
     Scene empty;
     empty.name = "empty";
     EXPECT_THROW(build_bvh_with_embree(empty, EmbreeQuality::medium, embree_options()), Error);
     EXPECT_THROW(build_bvh_with_embree(scene, EmbreeQuality::low, embree_options()), Error);
-    BuildOptions too_big = embree_options();
-    too_big.max_leaf_size = 33;
+    BuildConfig too_big = embree_options();
+    too_big.limits.max_leaf_size = 33;
     EXPECT_THROW(build_bvh_with_embree(scene, EmbreeQuality::medium, too_big), Error);
-    BuildOptions bad_budget = embree_options();
-    bad_budget.reference_budget = 0.5f;
+    BuildConfig bad_budget = embree_options();
+    bad_budget.limits.reference_budget = 0.5f;
     EXPECT_THROW(build_bvh_with_embree(scene, EmbreeQuality::high, bad_budget), Error);
 
     // A tiny scene: one triangle is a leaf root.

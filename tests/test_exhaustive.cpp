@@ -15,6 +15,8 @@
 #include "test_support.hpp"
 
 namespace spacebvh::builders {
+
+using namespace spacebvh::tools;
 namespace {
 
 using Node = testing_support::SmallNode;

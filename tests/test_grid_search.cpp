@@ -12,11 +12,14 @@
 #include "builders/grid_split_finder.hpp"
 #include "builders/object_sweep_split_finder.hpp"
 #include "builders/partition.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 
 namespace spacebvh::builders {
+
+using namespace spacebvh::tools;
 namespace {
 
 using Node = testing_support::SmallNode;
@@ -315,15 +318,15 @@ TEST(SearchSpaces, ParseNamesAndRejectUnknownOnes) {
     EXPECT_EQ(search_space_names(parse_search_spaces("grid,object")), "object+grid");
     EXPECT_THROW(parse_search_spaces("object,kd"), Error);
     EXPECT_THROW(parse_search_spaces(""), Error);
-    BuildOptions options = options_for("cbvh");
+    BuildConfig options = config_for("cbvh");
     options.search_spaces = 1u << 9;
     EXPECT_THROW(options.validate(), Error);
-    options = options_for("full");
+    options = config_for("full");
     EXPECT_EQ(options.cost.overlap_penalty, kInfinity);
-    options.grid_max_cells = 17;
+    options.grid.max_cells = 17;
     EXPECT_THROW(options.validate(), Error);
-    options.grid_max_cells = 8;
-    options.grid_resolution = 0.0f;
+    options.grid.max_cells = 8;
+    options.grid.resolution = 0.0f;
     EXPECT_THROW(options.validate(), Error);
 }
 
@@ -335,10 +338,10 @@ TEST(SearchSpaces, AnyUnionBuildsAValidTreeWithAnyOverlapPenalty) {
     small.triangles.resize(3000);
     for (const char* spaces : {"grid", "object,grid", "binned,spatial,grid", "spatial,grid"})
         for (float overlap_penalty : {0.0f, 1.0f, kInfinity}) {
-            BuildOptions options = options_for("cbvh");
+            BuildConfig options = config_for("cbvh");
             options.search_spaces = parse_search_spaces(spaces);
             options.cost.overlap_penalty = overlap_penalty;
-            const Bvh bvh = build_bvh(small, options);
+            const Bvh bvh = spacebvh::build(small, options);
             std::vector<uint8_t> seen(small.triangles.size(), 0);
             for (uint32_t id : bvh.primitives) seen[id] = 1;
             EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), ptrdiff_t(small.triangles.size())) << spaces;

@@ -16,19 +16,21 @@
 #include <tuple>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/packet_tracer.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
-#include "spacebvh/wide_tracer.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
+#include "spacebvh/trace.hpp"
 #include "test_support.hpp"
 #include "trace/traversal_common.hpp"
 #include "trace/triangle_pack.hpp"
 #include "trace/visit_order.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 using testing_support::cached_builtin_scene;
 using testing_support::closest_records;
 using testing_support::occlusion_records;
@@ -53,7 +55,7 @@ std::vector<std::string> explicit_kernels() {
 // Ray sets of a scene: random, primary in tile order, diffuse from the primary hits, rays leaving the
 // surface points of those hits towards random points (they start on a triangle: t = 0 must not count
 // beyond tmin), and random rays cut to [tmax / 4, tmax / 2] of their closest hit.
-std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets(const Scene& scene, const BinaryTracer& reference) {
+std::vector<std::pair<std::string, std::vector<Ray>>> ray_sets(const Scene& scene, const Tracer& reference) {
     std::vector<std::pair<std::string, std::vector<Ray>>> sets;
     sets.emplace_back("random", generate_random_rays(scene.bounds(), 3000, 11));
     const uint32_t width = 64, height = 48;
@@ -100,8 +102,8 @@ class KernelsOnScene : public ::testing::TestWithParam<std::string> {};
 TEST_P(KernelsOnScene, AnswersEqualTheReferenceKernel) {
     const Scene& scene = cached_builtin_scene(GetParam());
     for (const char* builder : {"cbvh", "spatial"}) {
-        const Bvh bvh = build_bvh(scene, options_for(builder));
-        const BinaryTracer reference(scene, bvh);
+        const Bvh bvh = spacebvh::build(scene, config_for(builder));
+        const Tracer reference(scene, bvh, Kernel::binary);
         const auto sets = ray_sets(scene, reference);
         std::vector<std::vector<HitRecord>> reference_closest, reference_occlusion;
         for (const auto& [set_name, rays] : sets) {
@@ -147,7 +149,7 @@ INSTANTIATE_TEST_SUITE_P(All, KernelsOnScene, ::testing::ValuesIn(builtin_scene_
 // already settled by a zero-length segment, and packets mixing direction signs (coherence lost).
 TEST(Packets, PartlyInactiveAndIncoherentPacketsMatchTheArbiter) {
     const Scene& scene = cached_builtin_scene("interior");
-    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    const Bvh bvh = spacebvh::build(scene, config_for("cbvh"));
     std::vector<Ray> rays = generate_primary_rays(default_camera(scene), 20, 10);  // 200 rays
     for (size_t i = 0; i < rays.size(); i += 7) rays[i].tmax = -1.0f;                 // empty segment
     for (size_t i = 3; i < rays.size(); i += 11) rays[i].tmax = rays[i].tmin;         // a point
@@ -156,7 +158,7 @@ TEST(Packets, PartlyInactiveAndIncoherentPacketsMatchTheArbiter) {
         for (NodeTest test : supported_node_tests(8)) {
             if (test == NodeTest::sse) continue;
             SCOPED_TRACE(std::to_string(size) + " rays per packet, " + to_string(test));
-            const PacketTracer tracer(scene, bvh, size, test);
+            const Tracer tracer(scene, bvh, TracerConfig{Kernel::packet8, test, WideCollapse::sah_optimal, size});
             const auto closest = closest_records(tracer, rays);
             const auto occlusion = occlusion_records(tracer, rays);
             size_t wrong = 0;
@@ -178,7 +180,7 @@ TEST(Kernels, CallerFlushToZeroModeChangesNoAnswer) {
     Scene scene = load_scene("builtin:organic");
     for (Triangle& t : scene.triangles)
         for (Vec3* v : {&t.v0, &t.v1, &t.v2}) *v = *v * 1e-20f;
-    const Bvh bvh = build_bvh(scene, options_for("binned"));
+    const Bvh bvh = spacebvh::build(scene, config_for("binned"));
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 400, 3);
     std::vector<HitRecord> truth;
     for (const Ray& ray : rays) truth.push_back(arbiter_closest_hit(scene, ray));
@@ -208,7 +210,7 @@ TEST(Kernels, CallerFlushToZeroModeChangesNoAnswer) {
 // children at once, so 8-wide nodes are fetched less often than binary ones on the same tree.
 TEST(Kernels, StatisticsAreConsistentAcrossKernels) {
     const Scene& scene = cached_builtin_scene("interior");
-    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    const Bvh bvh = spacebvh::build(scene, config_for("cbvh"));
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 2000, 9);
     for (const std::string& kernel : {std::string("binary"), std::string("bvh4"), std::string("bvh8")}) {
         const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
@@ -220,7 +222,7 @@ TEST(Kernels, StatisticsAreConsistentAcrossKernels) {
         EXPECT_EQ(singles.triangles_tested, batch.triangles_tested) << kernel;
         EXPECT_GT(batch.nodes_visited, rays.size()) << kernel;
     }
-    const WideTracer four(scene, bvh, 4), eight(scene, bvh, 8);
+    const Tracer four(scene, bvh, Kernel::bvh4), eight(scene, bvh, Kernel::bvh8);
     EXPECT_LT(eight.node_count(), four.node_count());
     EXPECT_LT(four.node_count(), bvh.nodes.size() / 2);
 }
@@ -241,13 +243,14 @@ TEST(Kernels, TileOrderGroupsTilesAndIsAPermutation) {
 
 TEST(Kernels, BadChoicesAreClearErrors) {
     const Scene& scene = cached_builtin_scene("soup");
-    const Bvh bvh = build_bvh(scene, options_for("binned"));
+    const Bvh bvh = spacebvh::build(scene, config_for("binned"));
     EXPECT_THROW(make_tracer("bvh16", scene, bvh), Error);
     EXPECT_THROW(make_tracer("bvh8-sse", scene, bvh), Error);  // SSE tests 4 lanes
     EXPECT_THROW(make_tracer("bvh4-avx2", scene, bvh), Error);
-    EXPECT_THROW(WideTracer(scene, bvh, 5), Error);
-    EXPECT_THROW(PacketTracer(scene, bvh, 0), Error);
-    EXPECT_THROW(PacketTracer(scene, bvh, 257), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh4, NodeTest::avx2}), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::sse}), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 257}), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh8, NodeTest::best, WideCollapse::sah_optimal, 64}), Error);
     try {
         make_tracer("warp", scene, bvh);
         FAIL() << "no error";
@@ -284,9 +287,9 @@ TEST(Kernels, EmptyAndSingleLeafTrees) {
 TEST(Kernels, LeafPackerCoversEveryLeafAndSharesPacks) {
     for (const std::string builder : {"cbvh", "spatial"}) {
         const Scene& scene = cached_builtin_scene("interior");
-        const Bvh bvh = build_bvh(scene, options_for(builder));
+        const Bvh bvh = spacebvh::build(scene, config_for(builder));
         trace::TrianglePacks packs;
-        trace::LeafPacker packer(scene, bvh, packs);
+        trace::LeafPacker packer(scene.triangles, bvh, packs);
         std::vector<std::pair<uint32_t, uint32_t>> placed;
         size_t leaves = 0, packs_one_per_leaf = 0;
         for (const BvhNode& node : bvh.nodes) {
@@ -333,7 +336,7 @@ TEST(Kernels, LeafPackerCoversEveryLeafAndSharesPacks) {
 // x dominant; closest hits compared field by field, occlusion answers, and the arbiter.
 TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
     const Scene& scene = cached_builtin_scene("interior");
-    const Bvh bvh = build_bvh(scene, options_for("cbvh"));
+    const Bvh bvh = spacebvh::build(scene, config_for("cbvh"));
     const AABB box = scene.bounds();
     const Vec3 origin = box.lo + (box.hi - box.lo) * 0.3f;
     for (const float spread : {0.05f, 0.6f}) {  // 0.6: y overtakes x for part of the fan
@@ -354,7 +357,7 @@ TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
                 if (test == NodeTest::sse) continue;
                 SCOPED_TRACE("spread " + std::to_string(spread) + ", " + std::to_string(size) + " rays per packet, " +
                              to_string(test));
-                const PacketTracer tracer(scene, bvh, size, test);
+                const Tracer tracer(scene, bvh, TracerConfig{Kernel::packet8, test, WideCollapse::sah_optimal, size});
                 std::vector<Hit> hits(rays.size());
                 tracer.intersect(rays, hits);
                 std::vector<uint8_t> occluded(rays.size());

@@ -18,12 +18,15 @@
 #include "builders/partition.hpp"
 #include "builders/split_search.hpp"
 #include "builders/top_down_builder.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/metrics.hpp"
+#include "spacebvh/tools/metrics.hpp"
 #include "test_support.hpp"
 
 namespace spacebvh {
+
+using namespace spacebvh::tools;
 namespace {
 
 using builders::Reference;
@@ -42,7 +45,7 @@ std::vector<TestNode> test_nodes() {
     std::mt19937 random(7);
     for (const char* name : {"soup", "interior"}) {
         const Scene& scene = testing_support::cached_builtin_scene(name);
-        const std::vector<Reference> all = builders::make_references(scene);
+        const std::vector<Reference> all = builders::make_references(scene.triangles);
         for (size_t count : {2, 3, 9, 40, 300, 2500}) {
             TestNode node{&scene, {}};
             std::sample(all.begin(), all.end(), std::back_inserter(node.references), count, random);
@@ -492,20 +495,20 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
 }
 
 TEST(Lookahead, InvalidSettingsAreRejected) {
-    BuildOptions options = options_for("cbvh");
-    options.lookahead_depth = kMaxLookaheadDepth + 1;
+    BuildConfig options = config_for("cbvh");
+    options.lookahead.depth = kMaxLookaheadDepth + 1;
     EXPECT_THROW(options.validate(), Error);
-    options.lookahead_depth = 1;
-    options.lookahead_candidates = 0;
+    options.lookahead.depth = 1;
+    options.lookahead.candidates = 0;
     EXPECT_THROW(options.validate(), Error);
-    options.lookahead_candidates = 3;
+    options.lookahead.candidates = 3;
     EXPECT_NO_THROW(options.validate());
     for (float share : {0.001f, -0.5f, 1.5f, std::nanf(""), kInfinity}) {
-        options.lookahead_top_share = share;
+        options.lookahead.top_share = share;
         EXPECT_THROW(options.validate(), Error) << share;
     }
     for (float share : {0.0f, kMinLookaheadTopShare, 0.5f, 1.0f}) {
-        options.lookahead_top_share = share;
+        options.lookahead.top_share = share;
         EXPECT_NO_THROW(options.validate()) << share;
     }
 }
@@ -521,24 +524,24 @@ TEST(Cancellation, FlagSetDuringTheBuildThrowsCancelled) {
             SCOPED_TRACE(std::string(builder) + " lookahead " + std::to_string(lookahead));
             std::atomic<bool> cancel{false};
             std::atomic<int> reports{0};
-            BuildOptions options = options_for(builder);
-            options.lookahead_depth = lookahead;
-            options.cancel = &cancel;
-            options.progress = [&](double fraction) {
+            BuildConfig options = config_for(builder);
+            options.lookahead.depth = lookahead;
+            options.hooks.cancel = &cancel;
+            options.hooks.progress = [&](double fraction) {
                 reports++;
                 if (fraction < 1.0) cancel = true;
             };
-            EXPECT_THROW(build_bvh(scene, options), Cancelled);
+            EXPECT_THROW(spacebvh::build(scene, options), Cancelled);
             EXPECT_GE(reports.load(), 1);
             EXPECT_LT(reports.load(), 50) << "the build went on long after the flag was set";
         }
     }
     std::atomic<bool> cancel{true};
-    BuildOptions options = options_for("binned");
-    options.cancel = &cancel;
-    EXPECT_THROW(build_bvh(scene, options), Cancelled);
+    BuildConfig options = config_for("binned");
+    options.hooks.cancel = &cancel;
+    EXPECT_THROW(spacebvh::build(scene, options), Cancelled);
     cancel = false;
-    const Bvh bvh = build_bvh(scene, options);
+    const Bvh bvh = spacebvh::build(scene, options);
     EXPECT_EQ(bvh.primitives.size(), scene.triangles.size());
 }
 

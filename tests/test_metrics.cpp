@@ -9,9 +9,11 @@
 #include <tbb/global_control.h>
 
 #include "spacebvh/clip.hpp"
-#include "spacebvh/metrics.hpp"
+#include "spacebvh/tools/metrics.hpp"
 
 namespace spacebvh {
+
+using namespace spacebvh::tools;
 namespace {
 
 BvhNode inner(AABB bounds, uint32_t first_child) { return {bounds, first_child, 0}; }

@@ -21,12 +21,13 @@
 #include "builders/object_sweep_split_finder.hpp"
 #include "builders/presplit.hpp"
 #include "builders/top_down_builder.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/scene.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/scene.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 using builders::PresplitOptions;
 using builders::Reference;
 
@@ -40,8 +41,8 @@ struct Method {
 };
 
 const Method kMethods[] = {
-    {"esc", [](const Scene& s, const PresplitOptions& o) { return builders::early_split_clipping(s, o); }},
-    {"evh", [](const Scene& s, const PresplitOptions& o) { return builders::edge_volume_heuristic(s, o); }},
+    {"esc", [](const Scene& s, const PresplitOptions& o) { return builders::early_split_clipping(s.triangles, o); }},
+    {"evh", [](const Scene& s, const PresplitOptions& o) { return builders::edge_volume_heuristic(s.triangles, o); }},
 };
 
 const Scene& cached_scene(const std::string& name) {
@@ -259,7 +260,7 @@ TEST_P(PerMethod, ObjectSweepTreeOverReferencesTracesCorrectly) {
         Bvh bvh = builder.build(std::move(refs), count);
         bvh.builder = method().name;
         ASSERT_FALSE(bvh.empty());
-        const BinaryTracer tracer(scene, bvh);
+        const Tracer tracer(scene, bvh, Kernel::binary);
         const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 300, 7);
         const float diagonal = scene.diagonal();
         size_t wrong = 0;

@@ -10,10 +10,11 @@
 #include <vector>
 
 #include "spacebvh/error.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 

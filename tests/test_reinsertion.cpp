@@ -1,5 +1,5 @@
-// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, BuildOptions::reinsertion_iterations,
-// optimize_bvh): the tree SAH never rises and falls where there is something to gain, the gains are
+// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, BuildConfig::reinsertion_iterations,
+// optimize): the tree SAH never rises and falls where there is something to gain, the gains are
 // priced exactly, the trees stay valid (depth cap included) and answer like the arbiter, the result
 // does not depend on the thread count, and bad options, tiny trees and cancellation are handled.
 // (Optimised trees on the builtin scenes against Embree and the arbiter: test_builders.cpp, suite
@@ -16,19 +16,21 @@
 #include <vector>
 
 #include "builders/reinsertion_optimizer.hpp"
-#include "embree/embree_builder.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/embree_builder.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/trace.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 using namespace spacebvh::testing_support;
 
 namespace {
 
-BuildOptions optimized(BuildOptions options, uint32_t iterations = kDefaultReinsertionIterations) {
-    options.reinsertion_iterations = iterations;
+BuildConfig optimized(BuildConfig options, uint32_t iterations = kDefaultReinsertionIterations) {
+    options.reinsertion.iterations = iterations;
     return options;
 }
 
@@ -53,9 +55,9 @@ TEST(Reinsertion, LowersTheSahOfBinnedTreesOnEveryBuiltinScene) {
     for (const std::string& name : builtin_scene_names()) {
         SCOPED_TRACE(name);
         const Scene& scene = cached_builtin_scene(name);
-        const BuildOptions options = options_for("binned");
-        const Bvh plain = build_bvh(scene, options);
-        const Bvh better = build_bvh(scene, optimized(options));
+        const BuildConfig options = config_for("binned");
+        const Bvh plain = spacebvh::build(scene, options);
+        const Bvh better = spacebvh::build(scene, optimized(options));
         EXPECT_EQ(better.builder, "binned+opt");
         const double before = tree_sah(plain, options.cost), after = tree_sah(better, options.cost);
         RecordProperty("sah_" + name, std::to_string(before) + " -> " + std::to_string(after));
@@ -72,10 +74,10 @@ TEST(Reinsertion, NeverRaisesTheSahOfAnyBuilder) {
     for (const std::string& builder : builder_names()) {
         for (float traversal_cost : {1.0f, 4.0f, 0.0f}) {
             SCOPED_TRACE(builder + ", C_T = " + std::to_string(traversal_cost));
-            BuildOptions options = options_for(builder);
+            BuildConfig options = config_for(builder);
             options.cost.traversal_cost = traversal_cost;
-            const Bvh plain = build_bvh(scene, options);
-            const Bvh better = build_bvh(scene, optimized(options));
+            const Bvh plain = spacebvh::build(scene, options);
+            const Bvh better = spacebvh::build(scene, optimized(options));
             const double before = tree_sah(plain, options.cost), after = tree_sah(better, options.cost);
             EXPECT_LE(after, before);
             if (traversal_cost == 0.0f) {
@@ -92,9 +94,9 @@ TEST(Reinsertion, NeverRaisesTheSahOfAnyBuilder) {
 // and the tree SAH changes by C_T / SA(root) times that (leaves and SA(root) stay).
 TEST(Reinsertion, GainsArePricedExactly) {
     const Scene& scene = cached_builtin_scene("interior");
-    BuildOptions options = options_for("binned");
+    BuildConfig options = config_for("binned");
     options.cost.traversal_cost = 2.0f;
-    Bvh bvh = build_bvh(scene, options);
+    Bvh bvh = spacebvh::build(scene, options);
     const double sah_before = tree_sah(bvh, options.cost);
     const AABB root_box = bvh.root().bounds;
     builders::ReinsertionOptions reinsertion;
@@ -120,36 +122,36 @@ TEST(Reinsertion, SmallScenesStayValidAndAnswerLikeTheArbiter) {
     for (const char* builder : {"binned", "spatial", "kdbvh"}) {
         for (uint32_t leaf : {1u, 4u}) {
             SCOPED_TRACE(std::string(builder) + ", max leaf " + std::to_string(leaf));
-            BuildOptions options = options_for(builder);
-            options.max_leaf_size = leaf;
-            const Bvh bvh = build_bvh(scene, optimized(options));
+            BuildConfig options = config_for(builder);
+            options.limits.max_leaf_size = leaf;
+            const Bvh bvh = spacebvh::build(scene, optimized(options));
             EXPECT_EQ(tree_violations(scene, bvh, options), "");
-            EXPECT_EQ(wrong_against_arbiter(scene, BinaryTracer(scene, bvh), rays), "");
+            EXPECT_EQ(wrong_against_arbiter(scene, Tracer(scene, bvh, Kernel::binary), rays), "");
         }
     }
 }
 
 TEST(Reinsertion, DepthCapIsRespected) {
     const Scene scene = soup_prefix(3000);
-    BuildOptions options = options_for("binned");
-    options.max_leaf_size = 1;
-    const Bvh plain = build_bvh(scene, options);
+    BuildConfig options = config_for("binned");
+    options.limits.max_leaf_size = 1;
+    const Bvh plain = spacebvh::build(scene, options);
     const uint32_t built_depth = tree_depth(plain);
     // Uncapped (64), the optimiser deepens this tree...
-    const Bvh deeper = build_bvh(scene, optimized(options));
+    const Bvh deeper = spacebvh::build(scene, optimized(options));
     ASSERT_GT(tree_depth(deeper), built_depth) << "the scene no longer tests the cap";
     // ...capped at the built depth (the same tree: no node reached the cap), it may not.
-    options.max_depth = built_depth;
-    ASSERT_EQ(first_difference(build_bvh(scene, options), plain), "");
-    const Bvh capped = build_bvh(scene, optimized(options));
+    options.limits.max_depth = built_depth;
+    ASSERT_EQ(first_difference(spacebvh::build(scene, options), plain), "");
+    const Bvh capped = spacebvh::build(scene, optimized(options));
     EXPECT_LE(tree_depth(capped), built_depth);
     EXPECT_LT(tree_sah(capped, options.cost), tree_sah(plain, options.cost));
     EXPECT_EQ(tree_violations(scene, capped, options), "");
     // A tree already deeper than the cap keeps its own depth as the cap.
     Bvh too_deep = plain;
-    BuildOptions shallow = optimized(options);
-    shallow.max_depth = built_depth / 2;
-    optimize_bvh(too_deep, shallow);
+    BuildConfig shallow = optimized(options);
+    shallow.limits.max_depth = built_depth / 2;
+    optimize(too_deep, shallow.reinsertion, shallow.limits.max_depth, shallow.hooks);
     EXPECT_LE(tree_depth(too_deep), built_depth);
     EXPECT_LE(tree_sah(too_deep, options.cost), tree_sah(plain, options.cost));
 }
@@ -159,7 +161,7 @@ TEST(Reinsertion, SameTreeForAnyThreadCount) {
     const Scene scene = soup_prefix(12000);
     for (const char* builder : {"binned", "spatial"}) {
         SCOPED_TRACE(builder);
-        const BuildOptions options = optimized(options_for(builder));
+        const BuildConfig options = optimized(config_for(builder));
         const Bvh one = build_in_arena(1, scene, options);
         EXPECT_EQ(first_difference(one, build_in_arena(2, scene, options)), "") << "1 vs 2 threads";
         tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);
@@ -167,33 +169,33 @@ TEST(Reinsertion, SameTreeForAnyThreadCount) {
     }
 }
 
-// Embree's imported trees are binary trees like ours: optimize_bvh improves them too.
+// Embree's imported trees are binary trees like ours: optimize improves them too.
 TEST(Reinsertion, OptimizesEmbreeTrees) {
     const Scene& scene = cached_builtin_scene("interior-rotated");
-    const BuildOptions options = optimized(options_for("binned"));
+    const BuildConfig options = optimized(config_for("binned"));
     const Bvh embree = build_bvh_with_embree(scene, EmbreeQuality::high, options);
     Bvh better = embree;
-    optimize_bvh(better, options);
+    optimize(better, options.reinsertion, options.limits.max_depth, options.hooks);
     EXPECT_EQ(better.builder, "embree-high+opt");
     EXPECT_LT(tree_sah(better, options.cost), tree_sah(embree, options.cost));
-    BuildOptions check = options;
-    check.builder = "spatial";  // Embree's high-quality trees split references (no object-partition checks)
-    check.reference_budget = 4.0f;
+    BuildConfig check = options;
+    check.preset = Preset::spatial;  // Embree's high-quality trees split references (no object-partition checks)
+    check.limits.reference_budget = 4.0f;
     EXPECT_EQ(tree_violations(scene, better, check), "");
 }
 
 TEST(Reinsertion, BadIterationCountsAreRejected) {
-    BuildOptions options = options_for("binned");
-    options.reinsertion_iterations = kMaxReinsertionIterations + 1;
+    BuildConfig options = config_for("binned");
+    options.reinsertion.iterations = kMaxReinsertionIterations + 1;
     try {
         options.validate();
-        FAIL() << "no error for " << options.reinsertion_iterations << " iterations";
+        FAIL() << "no error for " << options.reinsertion.iterations << " iterations";
     } catch (const Error& error) {
         EXPECT_NE(std::string(error.what()).find("reinsertion iterations"), std::string::npos) << error.what();
         EXPECT_NE(std::string(error.what()).find("1001"), std::string::npos) << error.what();
     }
-    EXPECT_THROW(build_bvh(two_floors(), options), Error);
-    options.reinsertion_iterations = kMaxReinsertionIterations;
+    EXPECT_THROW(spacebvh::build(two_floors(), options), Error);
+    options.reinsertion.iterations = kMaxReinsertionIterations;
     EXPECT_NO_THROW(options.validate());
 }
 
@@ -205,10 +207,10 @@ TEST(Reinsertion, TinyAndEmptyTrees) {
         SCOPED_TRACE(std::to_string(triangles) + " triangles");
         Scene part = scene;
         part.triangles.resize(triangles);
-        BuildOptions options = options_for("binned");
-        options.max_leaf_size = 1;
-        const Bvh plain = build_bvh(part, options);
-        const Bvh better = build_bvh(part, optimized(options));
+        BuildConfig options = config_for("binned");
+        options.limits.max_leaf_size = 1;
+        const Bvh plain = spacebvh::build(part, options);
+        const Bvh better = spacebvh::build(part, optimized(options));
         EXPECT_EQ(better.builder, "binned+opt");
         EXPECT_EQ(better.nodes.size(), 2 * triangles - 1);
         if (triangles <= 2) {
@@ -218,31 +220,31 @@ TEST(Reinsertion, TinyAndEmptyTrees) {
         EXPECT_EQ(tree_violations(part, better, options), "");
     }
     Bvh empty;
-    optimize_bvh(empty, optimized(options_for("binned")));
+    optimize(empty, optimized(config_for("binned")).reinsertion);
     EXPECT_TRUE(empty.empty());
     Scene nothing;
     nothing.name = "nothing";
-    EXPECT_THROW(build_bvh(nothing, optimized(options_for("binned"))), Error);
+    EXPECT_THROW(spacebvh::build(nothing, optimized(config_for("binned"))), Error);
 }
 
 // A set cancel flag stops the optimisation with Cancelled and leaves the tree as it was; progress
 // reports run from the build's half to 1.
 TEST(Reinsertion, CancelAndProgress) {
     const Scene scene = soup_prefix(6000);
-    BuildOptions options = optimized(options_for("binned"));
-    const Bvh plain = build_bvh(scene, options_for("binned"));
+    BuildConfig options = optimized(config_for("binned"));
+    const Bvh plain = spacebvh::build(scene, config_for("binned"));
     std::atomic<bool> cancel{true};
-    options.cancel = &cancel;
+    options.hooks.cancel = &cancel;
     Bvh tree = plain;
-    EXPECT_THROW(optimize_bvh(tree, options), Cancelled);
+    EXPECT_THROW(optimize(tree, options.reinsertion, options.limits.max_depth, options.hooks), Cancelled);
     EXPECT_EQ(first_difference(tree, plain), "");
     EXPECT_EQ(tree.builder, "binned");
-    EXPECT_THROW(build_bvh(scene, options), Cancelled);
+    EXPECT_THROW(spacebvh::build(scene, options), Cancelled);
 
-    options.cancel = nullptr;
+    options.hooks.cancel = nullptr;
     ProgressLog log;
-    options.progress = log.callback();
-    build_bvh(scene, options);
+    options.hooks.progress = log.callback();
+    spacebvh::build(scene, options);
     EXPECT_EQ(log.problems(), "");
     // The optimiser's share: past the build's half, before the end.
     EXPECT_GT(std::count_if(log.reports.begin(), log.reports.end(), [](double f) { return f > 0.5 && f < 1.0; }), 0);

@@ -9,9 +9,11 @@
 #include <set>
 
 #include "spacebvh/error.hpp"
-#include "spacebvh/render.hpp"
+#include "spacebvh/tools/render.hpp"
 
 namespace spacebvh {
+
+using namespace spacebvh::tools;
 namespace {
 
 // A floor quad (two triangles in y = 0) and a tilted triangle standing on it, with a hand-built
@@ -46,7 +48,7 @@ size_t distinct_colours(const Image& image, uint32_t rows) {
 
 TEST(Render, ShadedImageShowsTheScene) {
     TinyScene t;
-    BinaryTracer tracer(t.scene, t.bvh);
+    Tracer tracer(t.scene, t.bvh, Kernel::binary);
     Image image = render_shaded(t.scene, tracer, t.camera, 48, 32);
     ASSERT_EQ(image.width, 48u);
     ASSERT_EQ(image.height, 32u);
@@ -60,7 +62,7 @@ TEST(Render, ShadedImageShowsTheScene) {
 
 TEST(Render, HeatmapHasCostVariationAndALegend) {
     TinyScene t;
-    BinaryTracer tracer(t.scene, t.bvh);
+    Tracer tracer(t.scene, t.bvh, Kernel::binary);
     HeatmapInfo info;
     Image image = render_heatmap(t.scene, tracer, t.camera, 64, 40, &info);
     ASSERT_GT(info.legend_height, 0u);
@@ -115,7 +117,7 @@ TEST(Render, ColourRampIsMonotoneInLightness) {
 
 TEST(Render, WritesPngAndReportsErrors) {
     TinyScene t;
-    BinaryTracer tracer(t.scene, t.bvh);
+    Tracer tracer(t.scene, t.bvh, Kernel::binary);
     Image image = render_shaded(t.scene, tracer, t.camera, 16, 8);
     std::filesystem::path path = std::filesystem::temp_directory_path() / "spacebvh_test_render.png";
     write_png(path.string(), image);
@@ -138,7 +140,7 @@ TEST(Render, WritesPngAndReportsErrors) {
 // a negative or infinite one is refused.
 TEST(Render, HeatmapFixedScaleIsHonoured) {
     TinyScene t;
-    const BinaryTracer tracer(t.scene, t.bvh);
+    const Tracer tracer(t.scene, t.bvh, Kernel::binary);
     HeatmapOptions fixed;
     fixed.scale_max = 1000.0;
     HeatmapInfo info;

@@ -18,9 +18,11 @@
 #include <vector>
 
 #include "spacebvh/error.hpp"
-#include "spacebvh/scene.hpp"
+#include "spacebvh/tools/scene.hpp"
 
 namespace spacebvh {
+
+using namespace spacebvh::tools;
 namespace {
 
 namespace fs = std::filesystem;

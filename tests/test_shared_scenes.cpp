@@ -12,15 +12,17 @@
 #include <tuple>
 #include <vector>
 
-#include "embree/embree_scene.hpp"
-#include "spacebvh/bvh.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 #include "test_support.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 
@@ -122,8 +124,8 @@ TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
     if (!std::filesystem::exists(scene_path(shared))) GTEST_SKIP() << "shared scene not found: " << scene_path(shared);
     if (skipped(shared, builder)) GTEST_SKIP() << builder << " is not run on " << shared.key << " (build time)";
     const Case c = load_case(shared);
-    const BuildOptions options = testing_support::options_for_tree(builder);
-    const Bvh bvh = build_bvh(c.scene, options);
+    const BuildConfig options = testing_support::options_for_tree(builder);
+    const Bvh bvh = spacebvh::build(c.scene, options);
     // Every kernel family on the same tree: the binary reference, both wide layouts and packets.
     for (const char* kernel : {"binary", "bvh4", "bvh8", "packet8"}) {
         const std::unique_ptr<Tracer> tracer = make_tracer(kernel, c.scene, bvh);
@@ -165,9 +167,9 @@ TEST_P(SharedSceneOnly, CbvhTreeSahIsAtMostBinned) {
     const SharedScene& shared = GetParam();
     if (!std::filesystem::exists(scene_path(shared))) GTEST_SKIP() << "shared scene not found: " << scene_path(shared);
     const Scene scene = load_scene(scene_path(shared), transform_of(shared));
-    const BuildOptions sweep = options_for("cbvh"), binned = options_for("binned");
-    const double sah_cbvh = tree_sah(build_bvh(scene, sweep), sweep.cost);
-    const double sah_binned = tree_sah(build_bvh(scene, binned), binned.cost);
+    const BuildConfig sweep = config_for("cbvh"), binned = config_for("binned");
+    const double sah_cbvh = tree_sah(spacebvh::build(scene, sweep), sweep.cost);
+    const double sah_binned = tree_sah(spacebvh::build(scene, binned), binned.cost);
     RecordProperty("sah_cbvh", std::to_string(sah_cbvh));
     RecordProperty("sah_binned", std::to_string(sah_binned));
     std::printf("[ info ] %s: tree SAH cbvh %.4f, binned %.4f\n", shared.key, sah_cbvh, sah_binned);

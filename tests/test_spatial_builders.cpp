@@ -5,19 +5,22 @@
 #include <map>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
-#include "spacebvh/scene.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/tools/scene.hpp"
 
 namespace spacebvh {
+
+using namespace spacebvh::tools;
 namespace {
 
-// "+sweep": the preset with the exact spatial sweep instead of bins (BuildOptions::exact_spatial_sweep).
+// "+sweep": the preset with the exact spatial sweep instead of bins (BuildConfig::exact_spatial_sweep).
 const std::vector<std::string> kSplittingBuilders = {"kdbvh", "kdbvh+sweep", "spatial", "sbvh", "esc", "evh", "full"};
 
-BuildOptions options_of(const std::string& spec) {
+BuildConfig options_of(const std::string& spec) {
     const size_t plus = spec.find('+');
-    BuildOptions options = options_for(spec.substr(0, plus));
-    options.exact_spatial_sweep = plus != std::string::npos;
+    BuildConfig options = config_for(spec.substr(0, plus));
+    options.spatial.exact_sweep = plus != std::string::npos;
     return options;
 }
 
@@ -42,7 +45,7 @@ class SplittingBuilder : public ::testing::TestWithParam<std::string> {};
 // samples) lies in the box of some leaf that references it; else rays could pass through a hole.
 TEST_P(SplittingBuilder, LeavesReferencingATriangleCoverAllOfIt) {
     const Scene& scene = rotated_interior();
-    const Bvh bvh = build_bvh(scene, options_of(GetParam()));
+    const Bvh bvh = spacebvh::build(scene, options_of(GetParam()));
     const auto boxes = leaf_boxes_by_triangle(bvh);
     size_t checked_points = 0, split_triangles = 0;
     for (uint32_t id = 0; id < scene.triangles.size(); ++id) {
@@ -77,9 +80,9 @@ TEST_P(SplittingBuilder, BudgetIsHonouredAndLeavesHoldATriangleOnce) {
     const Scene& scene = rotated_interior();
     for (float budget : {1.0f, 1.1f, 1.3f, 1.5f}) {
         if (GetParam() == "full" && budget > 1.1f) continue;  // the slowest builder: the two tightest budgets
-        BuildOptions options = options_of(GetParam());
-        options.reference_budget = budget;
-        const Bvh bvh = build_bvh(scene, options);
+        BuildConfig options = options_of(GetParam());
+        options.limits.reference_budget = budget;
+        const Bvh bvh = spacebvh::build(scene, options);
         const size_t limit = size_t(double(budget) * double(scene.triangles.size()));
         EXPECT_LE(bvh.primitives.size(), limit) << GetParam() << " budget " << budget;
         if (budget == 1.0f) {
@@ -106,7 +109,7 @@ INSTANTIATE_TEST_SUITE_P(All, SplittingBuilder, ::testing::ValuesIn(kSplittingBu
 TEST(SpatialBuilders, BeatTheObjectSweepOnTheRotatedInterior) {
     const Scene& scene = rotated_interior();
     const auto sah_of = [&](const std::string& name) {
-        const Bvh bvh = build_bvh(scene, options_for(name));
+        const Bvh bvh = spacebvh::build(scene, config_for(name));
         // Tree SAH with distinct triangles per leaf, computed here directly from the definition.
         const float root_area = bvh.root().bounds.area();
         double sah = 0;
@@ -125,11 +128,11 @@ TEST(SpatialBuilders, BeatTheObjectSweepOnTheRotatedInterior) {
 TEST(SpatialBuilders, InfiniteOverlapPenaltyReducesOverlappingSiblings) {
     const Scene scene = load_scene("builtin:interior");
     auto overlapping_pairs = [&](float overlap_penalty) {
-        BuildOptions options = options_for("spatial");
+        BuildConfig options = config_for("spatial");
         options.cost.overlap_penalty = overlap_penalty;
-        options.reference_budget = 4.0f;
-        options.unsplitting = false;
-        const Bvh bvh = build_bvh(scene, options);
+        options.limits.reference_budget = 4.0f;
+        options.spatial.unsplitting = false;
+        const Bvh bvh = spacebvh::build(scene, options);
         size_t overlapping = 0;
         for (const BvhNode& node : bvh.nodes) {
             if (node.is_leaf()) continue;

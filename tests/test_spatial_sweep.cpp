@@ -9,10 +9,12 @@
 #include "builders/partition.hpp"
 #include "builders/spatial_split.hpp"
 #include "builders/spatial_sweep_split_finder.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::builders {
+
 namespace {
 
 // Brute force for one plane: apply the split with the partition code (every straddler clipped into
@@ -201,9 +203,9 @@ TEST(SpatialSweep, SpentBudgetSendsAStraddlerToTheCheaperSide) {
 }
 
 TEST(SpatialSweep, InteriorSamplesAreValidated) {
-    BuildOptions options = options_for("kdbvh");
-    options.exact_spatial_sweep = true;
-    options.sweep_interior_samples = 65;
+    BuildConfig options = config_for("kdbvh");
+    options.spatial.exact_sweep = true;
+    options.spatial.sweep_interior_samples = 65;
     EXPECT_THROW(options.validate(), Error);
 }
 

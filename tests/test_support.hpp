@@ -20,14 +20,17 @@
 #include <vector>
 
 #include "builders/reference.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/presets.hpp"
 #include "spacebvh/clip.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/scene.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/scene.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 namespace spacebvh::testing_support {
+
+using namespace spacebvh::tools;
 
 // `builtin:NAME`, loaded once per test process (thread-safe).
 inline const Scene& cached_builtin_scene(const std::string& name) {
@@ -103,7 +106,7 @@ inline bool partitions_objects(const std::string& builder) { return builder == "
 // Object partitioning: each triangle in exactly one leaf whose box contains the triangle's box.
 // Spatial splits: each leaf box touches its triangles, and each vertex of a triangle lies in the box
 // of a leaf that lists it. Returns "" when all hold, else a description of the first violations.
-inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const BuildOptions& options,
+inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const BuildConfig& options,
                             uint32_t* depth_out = nullptr) {
     std::ostringstream problems;
     int reported = 0;
@@ -111,7 +114,7 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
         if (reported++ < 8) problems << text << "; ";
     };
     if (bvh.nodes.empty()) return "no nodes";
-    const bool strict = partitions_objects(options.builder);
+    const bool strict = partitions_objects(to_string(options.preset));
     std::vector<uint8_t> reached(bvh.nodes.size(), 0);
     std::vector<uint32_t> seen(scene.triangles.size(), 0);
     std::vector<uint8_t> vertex_covered(scene.triangles.size(), 0);  // bit i: vertex i in a listing leaf's box
@@ -154,7 +157,7 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
             problem("leaf " + std::to_string(index) + " runs past the primitives array");
             continue;
         }
-        if (node.reference_count > options.max_leaf_size && depth < options.max_depth)
+        if (node.reference_count > options.limits.max_leaf_size && depth < options.limits.max_depth)
             problem("leaf " + std::to_string(index) + " holds " + std::to_string(node.reference_count) +
                     " references at depth " + std::to_string(depth));
         std::vector<uint32_t> listed(bvh.primitives.begin() + node.first, bvh.primitives.begin() + next_primitive);
@@ -178,8 +181,8 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
                 if (node.bounds.contains(triangle.vertex(v))) vertex_covered[primitive] |= uint8_t(1u << v);
         }
     }
-    if (max_depth > options.max_depth)
-        problem("depth " + std::to_string(max_depth) + " exceeds max_depth " + std::to_string(options.max_depth));
+    if (max_depth > options.limits.max_depth)
+        problem("depth " + std::to_string(max_depth) + " exceeds max_depth " + std::to_string(options.limits.max_depth));
     for (size_t i = 0; i < reached.size(); ++i)
         if (!reached[i]) {
             problem("node " + std::to_string(i) + " unreachable");
@@ -190,7 +193,7 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
                 " primitive entries");
     const size_t budget = strict ? scene.triangles.size()
                                  : std::max(scene.triangles.size(),
-                                            size_t(double(options.reference_budget) * double(scene.triangles.size())));
+                                            size_t(double(options.limits.reference_budget) * double(scene.triangles.size())));
     if (bvh.primitives.size() > budget)
         problem(std::to_string(bvh.primitives.size()) + " references exceed the budget of " + std::to_string(budget));
     for (size_t i = 0; i < seen.size(); ++i) {
@@ -210,11 +213,11 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
 }
 
 // A preset's options; "NAME+opt" adds the reinsertion optimisation with the CLI's default effort.
-inline BuildOptions options_for_tree(const std::string& name) {
+inline BuildConfig options_for_tree(const std::string& name) {
     constexpr std::string_view kSuffix = "+opt";
-    if (!name.ends_with(kSuffix)) return options_for(name);
-    BuildOptions options = options_for(name.substr(0, name.size() - kSuffix.size()));
-    options.reinsertion_iterations = kDefaultReinsertionIterations;
+    if (!name.ends_with(kSuffix)) return config_for(name);
+    BuildConfig options = config_for(name.substr(0, name.size() - kSuffix.size()));
+    options.reinsertion.iterations = kDefaultReinsertionIterations;
     return options;
 }
 
@@ -235,7 +238,7 @@ inline void arbiter_records(const Scene& scene, std::span<const Ray> rays, std::
 }
 
 // Counts our answers that disagree with the arbiter's, listing a few.
-inline std::string wrong_against_arbiter(const Scene& scene, const BinaryTracer& tracer, std::span<const Ray> rays) {
+inline std::string wrong_against_arbiter(const Scene& scene, const Tracer& tracer, std::span<const Ray> rays) {
     std::vector<HitRecord> truth_closest, truth_occlusion;
     arbiter_records(scene, rays, truth_closest, truth_occlusion);
     const std::vector<HitRecord> ours_closest = closest_records(tracer, rays);
@@ -280,7 +283,7 @@ inline std::vector<Ray> probing_rays(const Scene& scene, size_t random_count, ui
     return rays;
 }
 
-// BuildOptions::progress reports, collected from any thread.
+// BuildConfig::progress reports, collected from any thread.
 struct ProgressLog {
     std::mutex mutex;
     std::vector<double> reports;
@@ -317,10 +320,10 @@ inline std::string first_difference(const Bvh& a, const Bvh& b) {
     return "";
 }
 
-inline Bvh build_in_arena(int threads, const Scene& scene, const BuildOptions& options) {
+inline Bvh build_in_arena(int threads, const Scene& scene, const BuildConfig& options) {
     tbb::task_arena arena(threads);
     Bvh bvh;
-    arena.execute([&] { bvh = build_bvh(scene, options); });
+    arena.execute([&] { bvh = spacebvh::build(scene, options); });
     return bvh;
 }
 

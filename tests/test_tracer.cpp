@@ -19,13 +19,16 @@
 #include <tuple>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
-#include "spacebvh/wide_tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "core/exact_triangle.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 
@@ -250,9 +253,9 @@ std::string disagreements_with_arbiter(const Scene& scene, const Bvh& bvh, const
 }
 
 Bvh build_with(const Scene& scene, const std::string& builder, uint32_t max_leaf = 8) {
-    BuildOptions options = options_for(builder);
-    options.max_leaf_size = max_leaf;
-    return build_bvh(scene, options);
+    BuildConfig options = config_for(builder);
+    options.limits.max_leaf_size = max_leaf;
+    return spacebvh::build(scene, options);
 }
 
 std::string param_name(const ::testing::TestParamInfo<std::string>& info) {
@@ -370,7 +373,7 @@ TEST(Tracer, RayThroughASharedVertexHitsItsTriangles) {
     EXPECT_GT(exact_hits, 0u) << "intersect_triangle_exact: no triangle containing v is hit by a ray through v";
     const HitRecord truth = arbiter_closest_hit(fan, ray);
     EXPECT_TRUE(truth.is_hit()) << "the arbiter lets the ray slip through the fan at its vertex";
-    const BinaryTracer tracer(fan, build_with(fan, "binned"));
+    const Tracer tracer(fan, build_with(fan, "binned"), Kernel::binary);
     const Hit hit = tracer.intersect(ray);
     ASSERT_TRUE(hit.is_hit()) << "the tracer lets the ray slip through the fan at its vertex";
     EXPECT_NEAR(hit.t, 1.0f, 1e-6f);
@@ -440,7 +443,7 @@ TEST(Tracer, RayInTheSlabPlaneOfAFlatNode) {
     scene.name = "flat";
     scene.triangles = {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}},     // 0: in z = 0
                        {{6, -1, -1}, {6, 5, -1}, {6, 2, 3}}};  // 1: in x = 6, crossing z = 0
-    const BinaryTracer tracer(scene, build_with(scene, "binned", 1));
+    const Tracer tracer(scene, build_with(scene, "binned", 1), Kernel::binary);
     for (float zero : {0.0f, -0.0f}) {
         Ray ray;
         ray.org = {-1.0f, 1.0f, 0.0f};  // in the plane z = 0
@@ -480,7 +483,7 @@ using testing_support::two_floors;  // two unit squares at z = 0 (triangles 0, 1
 // Hits beyond tmax or before tmin are not reported, by closest hit or occlusion; the ends are inclusive.
 TEST(Tracer, TminAndTmaxAreHonoured) {
     const Scene scene = two_floors();
-    const BinaryTracer tracer(scene, build_with(scene, "binned", 1));
+    const Tracer tracer(scene, build_with(scene, "binned", 1), Kernel::binary);
     Ray ray;
     ray.org = {0.7f, 0.2f, 1.0f};
     ray.dir = {0, 0, -1};
@@ -601,7 +604,7 @@ TEST_P(TracerWithBuilder, DegenerateTrianglesAreNeverHit) {
         }
     for (uint32_t max_leaf : {1u, 8u}) {
         const Bvh tree = build_with(scene, GetParam(), max_leaf);
-        const BinaryTracer tracer(scene, tree);
+        const Tracer tracer(scene, tree, Kernel::binary);
         size_t degenerate_hits = 0;
         for (const Ray& ray : rays) {
             const Hit hit = tracer.intersect(ray);
@@ -614,7 +617,7 @@ TEST_P(TracerWithBuilder, DegenerateTrianglesAreNeverHit) {
     Scene only;
     only.name = "only_degenerate";
     only.triangles = degenerate;
-    const BinaryTracer tracer(only, build_with(only, GetParam(), 1));
+    const Tracer tracer(only, build_with(only, GetParam(), 1), Kernel::binary);
     size_t hits = 0;
     for (const Ray& ray : rays) hits += tracer.intersect(ray).is_hit() + tracer.occluded(ray);
     EXPECT_EQ(hits, 0u);
@@ -631,7 +634,7 @@ TEST(Tracer, TinyTrianglesAreHitLikeTheArbiterSays) {
         scene.triangles.push_back({c, c + Vec3(s, 0, 0.3f * s), c + Vec3(0.2f * s, s, -s)});
     }
     const Bvh tree = build_with(scene, "binned", 4);
-    const BinaryTracer tracer(scene, tree);
+    const Tracer tracer(scene, tree, Kernel::binary);
     std::vector<Ray> rays;
     size_t hits = 0;
     for (const Triangle& t : scene.triangles) {
@@ -665,7 +668,7 @@ bool same_hit(const Hit& a, const Hit& b) {
 // Statistics mode returns the same answers; counts are positive and add up to the batch totals.
 TEST(Tracer, TraversalStatsAreConsistent) {
     const Scene& scene = soup();
-    const BinaryTracer tracer(scene, build_with(scene, "binned"));
+    const Tracer tracer(scene, build_with(scene, "binned"), Kernel::binary);
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 2000, 4);
     TraversalStats closest_sum, occlusion_sum;
     size_t different = 0, hits = 0;
@@ -710,7 +713,7 @@ TEST(Tracer, TraversalStatsAreConsistent) {
 // Batch calls give exactly the single-ray answers, with and without statistics, in any arena.
 TEST(Tracer, BatchEqualsSingleRayCalls) {
     const Scene& scene = soup();
-    const BinaryTracer tracer(scene, build_with(scene, "cbvh"));
+    const Tracer tracer(scene, build_with(scene, "cbvh"), Kernel::binary);
     std::vector<Ray> rays = generate_random_rays(scene.bounds(), 3001, 9);  // not a multiple of the chunk
     const std::vector<Ray> primary = generate_primary_rays(default_camera(scene), 40, 30);
     rays.insert(rays.end(), primary.begin(), primary.end());
@@ -739,13 +742,13 @@ TEST(Tracer, BatchEqualsSingleRayCalls) {
 // A moved-from tracer's target keeps working.
 TEST(Tracer, MoveKeepsTheLayout) {
     const Scene scene = two_floors();
-    BinaryTracer original(scene, build_with(scene, "binned"));
-    BinaryTracer moved(std::move(original));
+    Tracer original(scene, build_with(scene, "binned"), Kernel::binary);
+    Tracer moved(std::move(original));
     Ray ray;
     ray.org = {0.5f, 0.25f, 3.0f};
     ray.dir = {0, 0, -1};
     EXPECT_EQ(moved.intersect(ray).t, 3.0f);
-    BinaryTracer assigned(scene, Bvh{});
+    Tracer assigned(scene, Bvh{}, Kernel::binary);
     assigned = std::move(moved);
     EXPECT_EQ(assigned.intersect(ray).t, 3.0f);
 }
@@ -756,7 +759,7 @@ TEST(Tracer, MoveKeepsTheLayout) {
 // An empty Bvh traces: nothing is hit, in single and batch calls.
 TEST(Tracer, EmptyBvhMissesEverything) {
     const Scene scene = two_floors();
-    const BinaryTracer tracer(scene, Bvh{});
+    const Tracer tracer(scene, Bvh{}, Kernel::binary);
     const std::vector<Ray> rays = generate_random_rays(scene.bounds(), 500, 2);
     size_t hits = 0;
     for (const Ray& ray : rays) {
@@ -769,7 +772,7 @@ TEST(Tracer, EmptyBvhMissesEverything) {
     EXPECT_EQ(hits, 0u);
     // Also over an empty scene.
     Scene empty;
-    const BinaryTracer nothing(empty, Bvh{});
+    const Tracer nothing(empty, Bvh{}, Kernel::binary);
     EXPECT_FALSE(nothing.intersect(rays[0]).is_hit());
     EXPECT_FALSE(nothing.occluded(rays[0]));
 }
@@ -791,7 +794,7 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
     root.reference_count = uint32_t(scene.triangles.size());
     bvh.nodes = {root};
     for (uint32_t i = 0; i < scene.triangles.size(); ++i) bvh.primitives.push_back(i);
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     std::vector<Ray> rays = generate_random_rays(scene.bounds(), 2000, 6);
     EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
     // The builder's single-leaf tree of one triangle too.
@@ -827,7 +830,7 @@ TEST(Tracer, SmallSubtreesAreTestedAsOneLeaf) {
             bvh.nodes[3 + leaf] = {triangles_box(leaf * per_leaf, per_leaf), leaf * per_leaf, per_leaf};
         }
         for (uint32_t i = 0; i < 4 * per_leaf; ++i) bvh.primitives.push_back(i);
-        const BinaryTracer tracer(scene, bvh);
+        const Tracer tracer(scene, bvh, Kernel::binary);
         Ray ray;
         ray.org = {-1.0f, 0.0f, 0.0f};
         ray.dir = {1.0f, 0.0f, 0.0f};
@@ -904,7 +907,7 @@ TEST(Tracer, VeryDeepTreeWithAFullStackMatchesTheArbiter) {
         bvh.nodes[first + 1] = leaf(2 * level + 1);
     }
     ASSERT_EQ(bvh.nodes.size(), 2 * (2 * kLevels + 1) - 1);
-    const BinaryTracer tracer(scene, bvh);
+    const Tracer tracer(scene, bvh, Kernel::binary);
     std::vector<Ray> rays = generate_random_rays(box, 300, 7);
     EXPECT_EQ(disagreements_with_arbiter(scene, bvh, rays), "");
     TraversalStats stats;
@@ -918,7 +921,7 @@ TEST(Tracer, DirectionLengthDoesNotChangeTheAnswer) {
     const IndexedMesh cube = grid_cube(4, -1.0f, 1.0f);
     const Scene scene = cube.scene("cube");
     const Bvh tree = build_with(scene, "binned", 2);
-    const BinaryTracer tracer(scene, tree);
+    const Tracer tracer(scene, tree, Kernel::binary);
     std::vector<Ray> rays;
     SplitMix64 rng(5);
     for (const Vec3& v : cube.vertices)

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <vector>
 
+#include "core/exact_triangle.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 
 namespace {
 

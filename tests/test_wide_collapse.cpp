@@ -10,12 +10,14 @@
 #include <set>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/build.hpp"
 #include "test_support.hpp"
 #include "trace/wide_collapse.hpp"
 #include "trace/wide_layout.hpp"
 
 using namespace spacebvh;
+using namespace spacebvh::tools;
 using testing_support::cached_builtin_scene;
 using trace::CollapsePlan;
 using trace::CollapseSlot;
@@ -54,7 +56,7 @@ private:
     }
     double leaf_cost(uint32_t node) {
         const BvhNode& n = bvh_.nodes[node];
-        const size_t triangles = trace::subtree_triangles(scene_, bvh_, node).size();
+        const size_t triangles = trace::subtree_triangles(scene_.triangles, bvh_, node).size();
         if (!n.is_leaf() && triangles > cost_.max_merged_leaf) return std::numeric_limits<double>::infinity();
         return double(n.bounds.area()) * cost_.pack * double((triangles + 3) / 4);
     }
@@ -97,7 +99,7 @@ std::string walk_plan(const Scene& scene, const Bvh& bvh, const CollapsePlan& pl
         for (const CollapseSlot& slot : slots) {
             if (!bvh.nodes[node].bounds.contains(bvh.nodes[slot.node].bounds)) return "child box outside its parent's";
             if (slot.leaf) {
-                for (uint32_t t : trace::subtree_triangles(scene, bvh, slot.node)) triangles.insert(t);
+                for (uint32_t t : trace::subtree_triangles(scene.triangles, bvh, slot.node)) triangles.insert(t);
             } else if (bvh.nodes[slot.node].is_leaf()) {
                 return "a binary leaf planned as an inner node";
             } else {
@@ -116,10 +118,10 @@ std::string walk_plan(const Scene& scene, const Bvh& bvh, const CollapsePlan& pl
 TEST(WideCollapse, SahOptimalPlanEqualsExhaustiveSearchOnSmallTrees) {
     for (const size_t triangles : {9u, 23u, 40u}) {
         const Scene scene = testing_support::soup_prefix(triangles);
-        BuildOptions options = options_for("cbvh");
-        options.max_leaf_size = 2;
+        BuildConfig options = config_for("cbvh");
+        options.limits.max_leaf_size = 2;
         options.cost.intersection_cost = 0.3f;  // small leaves
-        const Bvh bvh = build_bvh(scene, options);
+        const Bvh bvh = spacebvh::build(scene, options);
         ASSERT_GT(bvh.nodes.size(), 5u);
         for (const int width : {4, 8}) {
             for (const double pack : {0.3, 1.0, 4.0}) {
@@ -127,10 +129,10 @@ TEST(WideCollapse, SahOptimalPlanEqualsExhaustiveSearchOnSmallTrees) {
                 cost.pack = pack;
                 cost.max_merged_leaf = 4;
                 SCOPED_TRACE(std::to_string(triangles) + " triangles, width " + std::to_string(width) + ", pack " + std::to_string(pack));
-                const CollapsePlan plan(scene, bvh, width, WideCollapse::sah_optimal, cost);
+                const CollapsePlan plan(scene.triangles, bvh, width, WideCollapse::sah_optimal, cost);
                 const double exhaustive = ExhaustiveCollapse(scene, bvh, width, cost).cost();
                 EXPECT_NEAR(plan.cost(), exhaustive, 1e-9 * exhaustive);
-                const CollapsePlan area(scene, bvh, width, WideCollapse::largest_area, cost);
+                const CollapsePlan area(scene.triangles, bvh, width, WideCollapse::largest_area, cost);
                 EXPECT_LE(exhaustive, area.cost() * (1 + 1e-12));
             }
         }
@@ -145,7 +147,7 @@ TEST(WideCollapse, SahOptimalPlanBeatsLargestAreaAndCoversEveryTriangle) {
     for (const std::string& scene_name : builtin_scene_names()) {
         const Scene& scene = cached_builtin_scene(scene_name);
         for (const char* builder : {"cbvh", "spatial"}) {
-            const Bvh bvh = build_bvh(scene, options_for(builder));
+            const Bvh bvh = spacebvh::build(scene, config_for(builder));
             std::set<uint32_t> expected;
             for (const BvhNode& node : bvh.nodes)
                 if (node.is_leaf())
@@ -153,8 +155,8 @@ TEST(WideCollapse, SahOptimalPlanBeatsLargestAreaAndCoversEveryTriangle) {
                         if (!scene.triangles[bvh.primitives[i]].is_degenerate()) expected.insert(bvh.primitives[i]);
             for (const int width : {4, 8}) {
                 SCOPED_TRACE(scene_name + ", " + builder + ", width " + std::to_string(width));
-                const CollapsePlan sah(scene, bvh, width, WideCollapse::sah_optimal);
-                const CollapsePlan area(scene, bvh, width, WideCollapse::largest_area);
+                const CollapsePlan sah(scene.triangles, bvh, width, WideCollapse::sah_optimal);
+                const CollapsePlan area(scene.triangles, bvh, width, WideCollapse::largest_area);
                 EXPECT_LE(sah.cost(), area.cost() * (1 + 1e-12));
                 strictly_cheaper += sah.cost() < area.cost() * (1 - 1e-3);
                 for (const CollapsePlan* plan : {&sah, &area}) {
@@ -192,7 +194,7 @@ uint64_t lanes_checking_order(const trace::WideLayout<W>& layout, uint32_t index
 
 template <int W>
 void expect_slots_by_decreasing_size(const Scene& scene, const Bvh& bvh) {
-    const trace::WideLayout<W> layout = trace::collapse_to_wide<W>(scene, bvh, WideCollapse::sah_optimal);
+    const trace::WideLayout<W> layout = trace::collapse_to_wide<W>(scene.triangles, bvh, WideCollapse::sah_optimal);
     size_t misordered = 0;
     const uint64_t lanes = lanes_checking_order(layout, 0, misordered);
     EXPECT_EQ(misordered, 0u);
@@ -208,7 +210,7 @@ TEST(WideLayout, SlotsComeInDecreasingSubtreeSizeWithEmptySlotsLast) {
         const Scene& scene = cached_builtin_scene(scene_name);
         for (const char* builder : {"cbvh", "spatial"}) {
             SCOPED_TRACE(scene_name + ", " + builder);
-            const Bvh bvh = build_bvh(scene, options_for(builder));
+            const Bvh bvh = spacebvh::build(scene, config_for(builder));
             expect_slots_by_decreasing_size<4>(scene, bvh);
             expect_slots_by_decreasing_size<8>(scene, bvh);
         }

@@ -1,7 +1,8 @@
 #include "cli_common.hpp"
 
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
 
 #include <sys/resource.h>
 #include <tbb/info.h>
@@ -12,10 +13,12 @@
 #include <cstdio>
 #include <fstream>
 
-#include "embree/embree_builder.hpp"
+#include "spacebvh/tools/embree_builder.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 void SceneOptions::add_to(CLI::App& command) {
     command.add_option("--rotate", rotate, "rotate every vertex at load time, degrees: x:45,y:45,z:45 (R = Rz*Ry*Rx)");
@@ -124,39 +127,38 @@ uint32_t parse_unsigned(const std::string& text, const char* what) {
     }
 }
 
-BuildOptions BuildCliOptions::options(const std::string& builder_text) const {
+TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
     std::string builder_name = builder_text;
     const bool optimized_name = strip_optimize_suffix(builder_name);
     // Embree's trees take the same limits and costs; their name is not one of our presets.
-    BuildOptions options = options_for(is_embree_tree(builder_name) ? "binned" : builder_name);
+    TreeRecipe options{config_for(is_embree_tree(builder_name) ? "binned" : builder_name), builder_name};
     options.cost.traversal_cost = traversal_cost;
     options.cost.intersection_cost = intersection_cost;
     options.cost.leaf_block = leaf_block;
     if (!overlap_penalty.empty()) options.cost.overlap_penalty = parse_float_or_inf(overlap_penalty, "--co");
-    options.max_leaf_size = max_leaf_size;
-    options.max_depth = max_depth;
-    options.object_bins = bins;
-    options.spatial_bins = spatial_bins;
-    options.reference_budget = reference_budget;
-    options.unsplitting = !no_unsplitting;
-    if (!spatial_gate.empty()) options.spatial_gate_alpha = parse_float_or_inf(spatial_gate, "--spatial-gate");
+    options.limits.max_leaf_size = max_leaf_size;
+    options.limits.max_depth = max_depth;
+    options.object.bins = bins;
+    options.spatial.bins = spatial_bins;
+    options.limits.reference_budget = reference_budget;
+    options.spatial.unsplitting = !no_unsplitting;
+    if (!spatial_gate.empty()) options.spatial.gate_alpha = parse_float_or_inf(spatial_gate, "--spatial-gate");
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
-    options.grid_resolution = grid_resolution;
-    options.grid_max_cells = grid_max_cells;
-    options.grid_splitting = !no_grid_splitting;
-    options.lookahead_depth = lookahead;
-    options.lookahead_candidates = lookahead_candidates;
-    options.lookahead_top_share = lookahead_top;
-    options.cancel = interrupt_flag();
-    options.exact_spatial_sweep = spatial_sweep;
-    options.sweep_interior_samples = sweep_samples;
+    options.grid.resolution = grid_resolution;
+    options.grid.max_cells = grid_max_cells;
+    options.grid.splitting = !no_grid_splitting;
+    options.lookahead.depth = lookahead;
+    options.lookahead.candidates = lookahead_candidates;
+    options.lookahead.top_share = lookahead_top;
+    options.hooks.cancel = interrupt_flag();
+    options.spatial.exact_sweep = spatial_sweep;
+    options.spatial.sweep_interior_samples = sweep_samples;
     const bool iterations_given = optimize_iterations_option && optimize_iterations_option->count() > 0;
     if (optimize || optimized_name || iterations_given) {
         if (optimize_iterations == 0) throw Error("--optimize-iterations must be at least 1");
-        options.reinsertion_iterations = optimize_iterations;
+        options.reinsertion.iterations = optimize_iterations;
     }
     options.validate();
-    options.builder = builder_name;
     return options;
 }
 
@@ -279,13 +281,13 @@ size_t peak_rss_bytes() {
     return size_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
 }
 
-Bvh build_tree(const Scene& scene, const BuildOptions& options) {
-    if (is_embree_tree(options.builder) && (options.lookahead_depth > 0 || options.lookahead_top_share > 0))
+Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
+    if (is_embree_tree(options.builder) && (options.lookahead.depth > 0 || options.lookahead.top_share > 0))
         throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
     const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
     Bvh bvh;
     if (is_embree_tree(options.builder)) bvh = build_embree_tree(scene, options.builder, options);
-    else bvh = build_bvh(scene, options);  // our presets (optimised there); reports an unknown name
+    else bvh = spacebvh::build(scene, options);  // our presets (optimised there); reports an unknown name
     throw_if_interrupted();
     return bvh;
 }

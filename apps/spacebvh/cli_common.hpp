@@ -13,11 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/build.hpp"
+#include "spacebvh/presets.hpp"
 #include "spacebvh/error.hpp"
-#include "spacebvh/scene.hpp"
+#include "spacebvh/tools/scene.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 struct SceneOptions {
     std::string rotate;  // "x:45,y:45,z:45"
@@ -26,6 +29,11 @@ struct SceneOptions {
 
     void add_to(CLI::App& command);
     SceneTransform transform() const;
+};
+
+// A tree to build: one of our presets, or one of Embree's trees ("embree-high"), with its configuration.
+struct TreeRecipe : BuildConfig {
+    std::string builder;
 };
 
 struct BuildCliOptions {
@@ -52,7 +60,7 @@ struct BuildCliOptions {
     void add_to(CLI::App& command, bool with_builder = true);
     // Options for a builder name; "NAME+opt" (e.g. binned+opt, embree-high+opt) turns the
     // reinsertion optimisation on for that tree as --optimize does.
-    BuildOptions options(const std::string& builder_name) const;
+    TreeRecipe options(const std::string& builder_name) const;
 };
 
 // "binned+opt" -> "binned", returning true; other names are left as they are.
@@ -101,7 +109,7 @@ private:
 // --help text of --kernel: the kernels make_tracer knows on this CPU.
 std::string kernel_help();
 // Ctrl-C during a build, trace or compare: while an InterruptScope lives, the first SIGINT sets a
-// flag that builds (BuildOptions::cancel) and the commands' loops poll; they stop by throwing
+// flag that builds (BuildConfig::cancel) and the commands' loops poll; they stop by throwing
 // Cancelled and main exits with 130. The first SIGINT also restores the default action, so a second
 // one kills the process. Outside a scope Ctrl-C kills as usual.
 class InterruptScope {
@@ -120,7 +128,7 @@ void throw_if_interrupted();  // throws Cancelled once Ctrl-C was pressed
 // The peak resident set of this process so far (getrusage ru_maxrss), in bytes.
 size_t peak_rss_bytes();
 
-Bvh build_tree(const Scene& scene, const BuildOptions& options);
+Bvh build_tree(const Scene& scene, const TreeRecipe& recipe);
 std::string builder_list();  // for --help
 
 double milliseconds_since(std::chrono::steady_clock::time_point start);

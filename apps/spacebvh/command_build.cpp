@@ -3,10 +3,12 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 void add_build_command(CLI::App& app) {
     struct Options {
@@ -26,20 +28,20 @@ void add_build_command(CLI::App& app) {
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         const Scene scene = load_scene(options->source, options->scene.transform());
-        BuildOptions build_options = options->build.options(options->build.builder);
+        TreeRecipe build_options = options->build.options(options->build.builder);
         Progress progress("building", options->common);
-        build_options.progress = progress.callback();
+        build_options.hooks.progress = progress.callback();
         const auto start = std::chrono::steady_clock::now();
         const Bvh bvh = build_tree(scene, build_options);
         const double build_ms = milliseconds_since(start);
         const TreeStats stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
-        const BinaryTracer tracer(scene, bvh);
+        const Tracer tracer(scene, bvh, Kernel::binary);
 
         std::printf("scene            %s (%zu triangles)\n", scene.name.c_str(), scene.triangles.size());
         std::printf("builder          %s, %u threads\n", bvh.builder.c_str(), options->common.effective_threads());
         std::printf("cost model       %s, max leaf %u, max depth %u, lookahead %u, reinsertion iterations %u\n",
-                    build_options.cost.describe().c_str(), build_options.max_leaf_size, build_options.max_depth,
-                    build_options.lookahead_depth, build_options.reinsertion_iterations);
+                    build_options.cost.describe().c_str(), build_options.limits.max_leaf_size, build_options.limits.max_depth,
+                    build_options.lookahead.depth, build_options.reinsertion.iterations);
         std::printf("build            %.1f ms\n", build_ms);
         std::printf("nodes            %zu (%zu inner, %zu leaves)\n", stats.nodes, stats.inner_nodes, stats.leaves);
         std::printf("depth            max %u, mean leaf %.2f\n", stats.max_depth, stats.mean_leaf_depth);
@@ -60,9 +62,9 @@ void add_build_command(CLI::App& app) {
                                          {"C_o", std::isinf(build_options.cost.overlap_penalty)
                                                      ? nlohmann::json("inf")
                                                      : nlohmann::json(build_options.cost.overlap_penalty)}}},
-                               {"lookahead_depth", build_options.lookahead_depth},
-                               {"lookahead_top_share", build_options.lookahead_top_share},
-                               {"reinsertion_iterations", build_options.reinsertion_iterations},
+                               {"lookahead_depth", build_options.lookahead.depth},
+                               {"lookahead_top_share", build_options.lookahead.top_share},
+                               {"reinsertion_iterations", build_options.reinsertion.iterations},
                                {"build_ms", build_ms},
                                {"peak_rss_bytes", peak_rss},
                                {"nodes", stats.nodes},

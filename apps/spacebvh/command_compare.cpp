@@ -9,13 +9,16 @@
 #include <sstream>
 
 #include "cli_common.hpp"
-#include "embree/embree_scene.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
 #include "ray_sets.hpp"
-#include "spacebvh/metrics.hpp"
-#include "spacebvh/packet_tracer.hpp"
-#include "spacebvh/verify.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tools/verify.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 namespace {
 
 constexpr RayKind kKinds[] = {RayKind::random, RayKind::primary, RayKind::diffuse};
@@ -113,7 +116,7 @@ std::string ratio_text(double value, double reference, int precision) {
 // reinsertion optimisation; the label shows "+opt" whenever the tree is optimised ("binned+opt@budget=1.5").
 struct BuilderSpec {
     std::string label;
-    BuildOptions options;
+    TreeRecipe options;
 };
 
 BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& defaults) {
@@ -127,21 +130,21 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             if (key == "co") spec.options.cost.overlap_penalty = parse_float_or_inf(value, "co");
             else if (key == "ct") spec.options.cost.traversal_cost = parse_float_or_inf(value, "ct");
             else if (key == "ci") spec.options.cost.intersection_cost = parse_float_or_inf(value, "ci");
-            else if (key == "leaf") spec.options.max_leaf_size = parse_unsigned(value, "leaf");
+            else if (key == "leaf") spec.options.limits.max_leaf_size = parse_unsigned(value, "leaf");
             else if (key == "block") spec.options.cost.leaf_block = parse_unsigned(value, "block");
-            else if (key == "budget") spec.options.reference_budget = parse_float_or_inf(value, "budget");
-            else if (key == "bins") spec.options.object_bins = parse_unsigned(value, "bins");
-            else if (key == "spatialbins") spec.options.spatial_bins = parse_unsigned(value, "spatialbins");
-            else if (key == "gate") spec.options.spatial_gate_alpha = parse_float_or_inf(value, "gate");
+            else if (key == "budget") spec.options.limits.reference_budget = parse_float_or_inf(value, "budget");
+            else if (key == "bins") spec.options.object.bins = parse_unsigned(value, "bins");
+            else if (key == "spatialbins") spec.options.spatial.bins = parse_unsigned(value, "spatialbins");
+            else if (key == "gate") spec.options.spatial.gate_alpha = parse_float_or_inf(value, "gate");
             else if (key == "search") spec.options.search_spaces = parse_search_spaces(value);
-            else if (key == "grid") spec.options.grid_resolution = parse_float_or_inf(value, "grid");
-            else if (key == "gridmax") spec.options.grid_max_cells = parse_unsigned(value, "gridmax");
-            else if (key == "lookahead") spec.options.lookahead_depth = parse_unsigned(value, "lookahead");
-            else if (key == "candidates") spec.options.lookahead_candidates = parse_unsigned(value, "candidates");
-            else if (key == "top") spec.options.lookahead_top_share = parse_float_or_inf(value, "top");
-            else if (key == "sweep") spec.options.exact_spatial_sweep = parse_unsigned(value, "sweep") != 0;
-            else if (key == "samples") spec.options.sweep_interior_samples = parse_unsigned(value, "samples");
-            else if (key == "optimize") spec.options.reinsertion_iterations = parse_unsigned(value, "optimize");
+            else if (key == "grid") spec.options.grid.resolution = parse_float_or_inf(value, "grid");
+            else if (key == "gridmax") spec.options.grid.max_cells = parse_unsigned(value, "gridmax");
+            else if (key == "lookahead") spec.options.lookahead.depth = parse_unsigned(value, "lookahead");
+            else if (key == "candidates") spec.options.lookahead.candidates = parse_unsigned(value, "candidates");
+            else if (key == "top") spec.options.lookahead.top_share = parse_float_or_inf(value, "top");
+            else if (key == "sweep") spec.options.spatial.exact_sweep = parse_unsigned(value, "sweep") != 0;
+            else if (key == "samples") spec.options.spatial.sweep_interior_samples = parse_unsigned(value, "samples");
+            else if (key == "optimize") spec.options.reinsertion.iterations = parse_unsigned(value, "optimize");
             else throw Error("builder '" + text + "': unknown setting '" + key +
                              "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize)");
         }
@@ -149,7 +152,7 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
     }
     std::string name = text.substr(0, at);
     strip_optimize_suffix(name);
-    spec.label = name + (spec.options.reinsertion_iterations > 0 ? "+opt" : "") +
+    spec.label = name + (spec.options.reinsertion.iterations > 0 ? "+opt" : "") +
                  (at == std::string::npos ? "" : text.substr(at));
     return spec;
 }
@@ -297,7 +300,7 @@ void add_compare_command(CLI::App& app) {
             };
             const double build_share = 0.3;  // of the progress bar
             for (size_t b = 0; b < builders.size(); ++b) {
-                const BuildOptions& build_options = builders[b].options;
+                const TreeRecipe& build_options = builders[b].options;
                 std::vector<double> build_ms;
                 Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
@@ -307,7 +310,7 @@ void add_compare_command(CLI::App& app) {
                 }
                 const TreeStats tree_stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
                 if (b == 0) {
-                    const BinaryTracer tracer(scene, bvh);
+                    const Tracer tracer(scene, bvh, Kernel::binary);
                     for (RayKind kind : kKinds) ray_sets[int(kind)] = make_ray_set(kind, scene, tracer, parameters);
                     primary_row_major = ray_sets[int(RayKind::primary)];
                     ray_sets[int(RayKind::primary)] = gathered(primary_row_major, primary_order);

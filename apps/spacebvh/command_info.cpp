@@ -5,6 +5,8 @@
 
 namespace spacebvh::cli {
 
+using namespace spacebvh::tools;
+
 void add_info_command(CLI::App& app) {
     struct Options {
         std::string source;

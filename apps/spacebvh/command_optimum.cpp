@@ -11,6 +11,8 @@
 #include "cli_common.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 namespace {
 
 using TriangleSet = std::vector<Triangle>;
@@ -35,9 +37,9 @@ std::vector<TriangleSet> random_nodes(size_t nodes, uint32_t min_size, uint32_t 
 // Inner nodes of the scene's cbvh tree holding between min_size and max_size triangles, every k-th
 // of them in depth-first order so that at most `nodes` are taken.
 std::vector<TriangleSet> tree_nodes(const Scene& scene, size_t nodes, uint32_t min_size, uint32_t max_size) {
-    BuildOptions options = options_for("cbvh");
-    options.max_leaf_size = 1;  // leaves of single triangles: every small cluster is an inner node
-    const Bvh bvh = build_bvh(scene, options);
+    BuildConfig options = config_for("cbvh");
+    options.limits.max_leaf_size = 1;  // leaves of single triangles: every small cluster is an inner node
+    const Bvh bvh = spacebvh::build(scene, options);
     std::vector<uint32_t> subtree_size(bvh.nodes.size(), 0);
     for (size_t i = bvh.nodes.size(); i-- > 0;) {  // children come after their parent
         const BvhNode& node = bvh.nodes[i];
@@ -77,7 +79,7 @@ struct Row {
     size_t at_optimum = 0, below_optimum = 0, infeasible = 0;
 };
 
-nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, const BuildOptions& base) {
+nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, const BuildConfig& base) {
     std::vector<Row> rows = {
         {"object (cbvh sweep)", uint32_t(SearchSpace::object_sweep), false, {}},
         {"binned", uint32_t(SearchSpace::object_binned), false, {}},
@@ -98,8 +100,8 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
         optimum_sum += optimum.cost;
         leaf_sum += base.cost.leaf_cost(set.size());
         for (Row& row : rows) {
-            BuildOptions options = base;
-            options.grid_splitting = row.grid_splitting;
+            BuildConfig options = base;
+            options.grid.splitting = row.grid_splitting;
             const auto finders = builders::make_search_spaces(row.search_spaces, set, options, false, 0.0f);
             builders::Split best;
             for (const auto& finder : finders) {
@@ -172,10 +174,10 @@ void add_optimum_command(CLI::App& app) {
             options->max_size > builders::kMaxExhaustiveReferences)
             throw Error("--min-refs and --max-refs must satisfy 2 <= min <= max <= " +
                         std::to_string(builders::kMaxExhaustiveReferences));
-        const BuildOptions base = options->build.options("cbvh");
+        const BuildConfig base = options->build.options("cbvh");
         std::printf("Best local split cost of each search space / the exhaustive optimum over all partitions\n");
         std::printf("(x = ratio; * = clips references, so it may go below the partition optimum; grid G = ceil(%g N^(1/6)) <= %u)\n",
-                    base.grid_resolution, base.grid_max_cells);
+                    base.grid.resolution, base.grid.max_cells);
         nlohmann::json json;
         json["random"] = report("random nodes", random_nodes(options->nodes, options->min_size, options->max_size, options->seed), base);
         if (!options->source.empty()) {

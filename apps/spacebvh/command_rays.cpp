@@ -6,6 +6,8 @@
 
 namespace spacebvh::cli {
 
+using namespace spacebvh::tools;
+
 void add_rays_command(CLI::App& app) {
     struct Options {
         std::string source, kind = "random", output;
@@ -40,10 +42,10 @@ void add_rays_command(CLI::App& app) {
         parameters.width = options->camera.width;
         parameters.height = options->camera.height;
         parameters.diffuse_epsilon = options->epsilon;
-        std::optional<BinaryTracer> tracer;
-        if (kind == RayKind::diffuse) tracer.emplace(scene, build_bvh(scene, BuildOptions{}));
+        std::optional<Tracer> tracer;
+        if (kind == RayKind::diffuse) tracer.emplace(scene, spacebvh::build(scene, BuildConfig{}));
         const Bvh no_tree;
-        const BinaryTracer empty_tracer(scene, no_tree);
+        const Tracer empty_tracer(scene, no_tree, Kernel::binary);
         const std::vector<Ray> rays = make_ray_set(kind, scene, tracer ? *tracer : empty_tracer, parameters);
         write_ray_file(options->output, rays);
         std::printf("wrote %zu %s rays to %s\n", rays.size(), to_string(kind), options->output.c_str());

@@ -2,9 +2,12 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
-#include "spacebvh/render.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/render.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 void add_render_command(CLI::App& app) {
     struct Options {
@@ -37,7 +40,7 @@ void add_render_command(CLI::App& app) {
         const SceneTransform transform = options->scene.transform();
         const Scene scene = load_scene(options->source, transform);
         const Camera camera = options->camera.camera_for(scene, options->source, transform);
-        const BuildOptions build_options = options->build.options(options->build.builder);
+        const TreeRecipe build_options = options->build.options(options->build.builder);
         const Bvh bvh = build_tree(scene, build_options);
         const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
         const Tracer& tracer = *tracer_pointer;

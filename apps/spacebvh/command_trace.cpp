@@ -2,10 +2,13 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 void add_trace_command(CLI::App& app) {
     struct Options {
@@ -30,7 +33,7 @@ void add_trace_command(CLI::App& app) {
         const auto limit = options->common.thread_limit();
         const Scene scene = load_scene(options->source, options->scene.transform());
         const std::vector<Ray> rays = read_ray_file(options->rays_path);
-        const BuildOptions build_options = options->build.options(options->build.builder);
+        const TreeRecipe build_options = options->build.options(options->build.builder);
         const Bvh bvh = build_tree(scene, build_options);
         const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
         const Tracer& tracer = *tracer_pointer;

@@ -2,6 +2,8 @@
 
 namespace spacebvh::cli {
 
+using namespace spacebvh::tools;
+
 std::vector<Ray> make_ray_set(RayKind kind, const Scene& scene, const Tracer& tracer, const RaySetParameters& p) {
     switch (kind) {
         case RayKind::random:

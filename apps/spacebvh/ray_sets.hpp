@@ -3,10 +3,12 @@
 
 #include <vector>
 
-#include "spacebvh/rays.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
 
 struct RaySetParameters {
     size_t random_count = 1000000;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 
 namespace spacebvh {
 
@@ -120,5 +121,12 @@ struct Triangle {
     }
     constexpr Vec3 vertex(int i) const { return i == 0 ? v0 : (i == 1 ? v1 : v2); }
 };
+
+// The box of a triangle list (empty for none).
+inline AABB bounds_of(std::span<const Triangle> triangles) {
+    AABB box;
+    for (const Triangle& triangle : triangles) box.extend(triangle.bounds());
+    return box;
+}
 
 }  // namespace spacebvh

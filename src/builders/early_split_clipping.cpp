@@ -32,7 +32,7 @@ public:
         AABB box;
     };
 
-    explicit EscPolicy(const Scene& scene) : triangles_(scene.triangles) {
+    explicit EscPolicy(std::span<const Triangle> triangles) : triangles_(triangles) {
         // Serial sum in triangle order: the threshold must not depend on the thread count.
         double sum = 0.0;
         size_t count = 0;
@@ -68,15 +68,15 @@ public:
     AABB bounds(uint32_t, const Piece& piece) const { return piece.box; }
 
 private:
-    const std::vector<Triangle>& triangles_;
+    std::span<const Triangle> triangles_;
     double threshold_ = 0.0;
 };
 
 }  // namespace
 
-std::vector<Reference> early_split_clipping(const Scene& scene, const PresplitOptions& options) {
-    const EscPolicy policy(scene);
-    return detail::greedy_presplit(scene, options, policy);
+std::vector<Reference> early_split_clipping(std::span<const Triangle> triangles, const PresplitOptions& options) {
+    const EscPolicy policy(triangles);
+    return detail::greedy_presplit(triangles, options, policy);
 }
 
 }  // namespace spacebvh::builders

@@ -37,8 +37,8 @@ public:
         std::array<std::array<double, 3>, 3> corners;
     };
 
-    EvhPolicy(const Scene& scene, float t) : triangles_(scene.triangles) {
-        const AABB box = scene.bounds();
+    EvhPolicy(std::span<const Triangle> triangles, float t) : triangles_(triangles) {
+        const AABB box = bounds_of(triangles);
         const Vec3 e = box.extent();
         const double volume = box.is_empty() ? 0.0 : double(e.x) * double(e.y) * double(e.z);
         threshold_ = volume * std::exp2(-double(t));
@@ -124,15 +124,15 @@ private:
         return f;
     }
 
-    const std::vector<Triangle>& triangles_;
+    std::span<const Triangle> triangles_;
     double threshold_ = 0.0;
 };
 
 }  // namespace
 
-std::vector<Reference> edge_volume_heuristic(const Scene& scene, const PresplitOptions& options) {
-    const EvhPolicy policy(scene, options.evh_threshold);
-    return detail::greedy_presplit(scene, options, policy);
+std::vector<Reference> edge_volume_heuristic(std::span<const Triangle> triangles, const PresplitOptions& options) {
+    const EvhPolicy policy(triangles, options.evh_threshold);
+    return detail::greedy_presplit(triangles, options, policy);
 }
 
 }  // namespace spacebvh::builders

@@ -5,7 +5,7 @@
 // At a node N with lookahead depth D >= 1:
 //   options    the leaf (unless N must be split), and the candidates: each search space's K
 //              cheapest splits on each axis (SplitSearch::candidates; K = candidates_per_axis,
-//              BuildOptions::lookahead_candidates), the greedy split among them. So at most 1 + 3K
+//              LookaheadConfig::candidates), the greedy split among them. So at most 1 + 3K
 //              options per search space, and 1 + 6K for object + spatial. With K = 0, each search
 //              space's cheapest split (SplitSearch::cheapest_per_space): the choice between kinds of
 //              split, as the driver makes it at the top of the tree (lookahead to the leaves).

@@ -32,7 +32,9 @@
 #include <tbb/parallel_for.h>
 
 #include "builders/reference.hpp"
-#include "spacebvh/scene.hpp"
+#include <span>
+
+#include "spacebvh/geometry.hpp"
 
 namespace spacebvh::builders {
 
@@ -44,10 +46,10 @@ struct PresplitOptions {
 // ESC. Rule (ours; the paper leaves the threshold to the user per scene): a piece (the part of the
 // triangle inside a box) is split while its box "waste" SA(box) - 4 * area(piece) exceeds the mean
 // surface area of the non-degenerate triangles' boxes. See early_split_clipping.cpp.
-std::vector<Reference> early_split_clipping(const Scene& scene, const PresplitOptions& options);
+std::vector<Reference> early_split_clipping(std::span<const Triangle> triangles, const PresplitOptions& options);
 
 // EVH as in the paper, t = options.evh_threshold. See edge_volume_heuristic.cpp.
-std::vector<Reference> edge_volume_heuristic(const Scene& scene, const PresplitOptions& options);
+std::vector<Reference> edge_volume_heuristic(std::span<const Triangle> triangles, const PresplitOptions& options);
 
 namespace detail {
 
@@ -74,9 +76,8 @@ inline constexpr uint32_t kMaxPresplitDepth = 24;
 // and hence the output do not depend on anything but the input. Pops stop when the heap is empty
 // or the extra references reach the budget; each split adds (parts - 1) references.
 template <class Policy>
-std::vector<Reference> greedy_presplit(const Scene& scene, const PresplitOptions& options, const Policy& policy) {
+std::vector<Reference> greedy_presplit(std::span<const Triangle> triangles, const PresplitOptions& options, const Policy& policy) {
     using Piece = typename Policy::Piece;
-    const std::vector<Triangle>& triangles = scene.triangles;
     const size_t n = triangles.size();
     if (n == 0) return {};
     const size_t extra_budget = reference_limit(n, options.reference_budget) - n;

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "spacebvh/geometry.hpp"
-#include "spacebvh/scene.hpp"
+#include <span>
+
+#include "spacebvh/geometry.hpp"
 
 namespace spacebvh::builders {
 
@@ -20,7 +22,7 @@ struct Reference {
 
 // One reference per triangle, bounds = the triangle's box. Degenerate triangles are kept (they are
 // never hit, but keeping them preserves numbering and costs nothing in correctness).
-std::vector<Reference> make_references(const Scene& scene);
+std::vector<Reference> make_references(std::span<const Triangle> triangles);
 
 struct ReferenceSummary {
     AABB bounds;           // union of the reference boxes

@@ -35,8 +35,8 @@
 namespace spacebvh::builders {
 
 struct ReinsertionOptions {
-    uint32_t iterations = 0;  // batches at most (BuildOptions::reinsertion_iterations)
-    // No move may put a node deeper than this (BuildOptions::max_depth); a tree that is already
+    uint32_t iterations = 0;  // batches at most (ReinsertionConfig::iterations)
+    // No move may put a node deeper than this (LimitConfig::max_depth); a tree that is already
     // deeper keeps its own depth as the cap.
     uint32_t max_depth = 64;
     std::function<void(double)> progress;       // fraction of the iterations done; may be empty

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "builders/split.hpp"
-#include "spacebvh/bvh.hpp"
+#include "spacebvh/build.hpp"
 
 namespace spacebvh::builders {
 
@@ -15,10 +15,10 @@ namespace spacebvh::builders {
 // on equal cost the earlier finder's split is kept. `allow_unsplitting` and `spatial_gate_alpha` are
 // the preset's rules for the spatial search space.
 std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t search_spaces, std::span<const Triangle> triangles,
-                                                             const BuildOptions& options, bool allow_unsplitting,
+                                                             const BuildConfig& config, bool allow_unsplitting,
                                                              float spatial_gate_alpha);
 
 // True when the search spaces may clip references into both children (so the reference budget applies).
-bool splits_references(uint32_t search_spaces, const BuildOptions& options);
+bool splits_references(uint32_t search_spaces, const BuildConfig& config);
 
 }  // namespace spacebvh::builders

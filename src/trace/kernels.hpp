@@ -1,10 +1,10 @@
 // The compiled kernels (kernel_instances.cpp): one copy per instruction set, looked up at run time.
-// WideTracer and PacketTracer hold the table of the node test they were asked for.
+// A Tracer holds the table of the kernel and node test it was asked for.
 #pragma once
 
 #include <cstdint>
 
-#include "spacebvh/wide_tracer.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::trace {
 

@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <limits>
 
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::trace {
 

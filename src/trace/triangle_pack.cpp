@@ -10,7 +10,7 @@ void LeafPacker::put(uint32_t primitive) {
         open_lanes_ = 0;
     }
     TrianglePack& pack = packs_.back();
-    const Triangle& triangle = scene_.triangles[primitive];
+    const Triangle& triangle = triangles_[primitive];
     const Vec3* vertices[3] = {&triangle.v0, &triangle.v1, &triangle.v2};
     for (int k = 0; k < 3; ++k)
         for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][open_lanes_] = (*vertices[k])[axis];
@@ -19,9 +19,9 @@ void LeafPacker::put(uint32_t primitive) {
 }
 
 std::pair<uint32_t, uint32_t> LeafPacker::add(const BvhNode& leaf) {
-    std::vector<uint32_t>& triangles = triangles_;
+    std::vector<uint32_t>& triangles = scratch_;
     triangles.clear();
-    append_live_triangles(scene_, bvh_, leaf, triangles);
+    append_live_triangles(triangles_, bvh_, leaf, triangles);
     return add(std::span<const uint32_t>(triangles));
 }
 

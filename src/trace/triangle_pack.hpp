@@ -12,9 +12,11 @@
 #include <utility>
 #include <vector>
 
+#include <span>
+
 #include "spacebvh/bvh.hpp"
-#include "spacebvh/scene.hpp"
-#include "spacebvh/tracer.hpp"
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/trace.hpp"
 #include "trace/huge_page_allocator.hpp"
 #include "trace/watertight_triangle.hpp"
 
@@ -31,9 +33,9 @@ using TrianglePacks = std::vector<TrianglePack, HugePageAllocator<TrianglePack>>
 
 // Appends the non-degenerate triangles of binary leaf `leaf` (degenerate ones are never hit, so no
 // layout stores them).
-inline void append_live_triangles(const Scene& scene, const Bvh& bvh, const BvhNode& leaf, std::vector<uint32_t>& out) {
+inline void append_live_triangles(std::span<const Triangle> triangles, const Bvh& bvh, const BvhNode& leaf, std::vector<uint32_t>& out) {
     for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
-        if (!scene.triangles[bvh.primitives[i]].is_degenerate()) out.push_back(bvh.primitives[i]);
+        if (!triangles[bvh.primitives[i]].is_degenerate()) out.push_back(bvh.primitives[i]);
 }
 
 // Lays out the triangles of leaves, in the order the layout visits them, into shared packs. A kernel
@@ -48,7 +50,7 @@ inline void append_live_triangles(const Scene& scene, const Bvh& bvh, const BvhN
 // is not stored twice. Degenerate triangles are dropped: they are never hit.
 class LeafPacker {
 public:
-    LeafPacker(const Scene& scene, const Bvh& bvh, TrianglePacks& packs) : scene_(scene), bvh_(bvh), packs_(packs) {}
+    LeafPacker(std::span<const Triangle> triangles, const Bvh& bvh, TrianglePacks& packs) : triangles_(triangles), bvh_(bvh), packs_(packs) {}
 
     // Returns {first pack, lane count}; {0, 0} when every triangle of the leaf is degenerate.
     std::pair<uint32_t, uint32_t> add(const BvhNode& leaf);
@@ -58,11 +60,11 @@ public:
 private:
     void put(uint32_t primitive);
 
-    const Scene& scene_;
+    std::span<const Triangle> triangles_;
     const Bvh& bvh_;
     TrianglePacks& packs_;
     uint32_t open_lanes_ = 4;  // lanes filled in packs_.back(); 4 = no room left
-    std::vector<uint32_t> triangles_;  // scratch of add()
+    std::vector<uint32_t> scratch_;  // scratch of add()
 };
 
 // Per-ray constants of the four-wide watertight triangle test (the shear of WatertightRay, broadcast).

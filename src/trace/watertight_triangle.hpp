@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "spacebvh/geometry.hpp"
-#include "spacebvh/verify.hpp"
+#include "core/exact_triangle.hpp"
 
 namespace spacebvh::trace {
 

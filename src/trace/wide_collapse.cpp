@@ -33,23 +33,23 @@ void sort_unique(std::vector<uint32_t>& values) {
 
 }  // namespace
 
-std::vector<uint32_t> subtree_triangles(const Scene& scene, const Bvh& bvh, uint32_t node) {
-    std::vector<uint32_t> triangles, stack{node};
+std::vector<uint32_t> subtree_triangles(std::span<const Triangle> triangles, const Bvh& bvh, uint32_t node) {
+    std::vector<uint32_t> live, stack{node};
     while (!stack.empty()) {
         const BvhNode& n = bvh.nodes[stack.back()];
         stack.pop_back();
         if (n.is_leaf()) {
-            append_live_triangles(scene, bvh, n, triangles);
+            append_live_triangles(triangles, bvh, n, live);
         } else {
             stack.push_back(n.first + 1);
             stack.push_back(n.first);
         }
     }
-    sort_unique(triangles);
-    return triangles;
+    sort_unique(live);
+    return live;
 }
 
-CollapsePlan::CollapsePlan(const Scene& scene, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost)
+CollapsePlan::CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost)
     : bvh_(bvh), width_(width), strategy_(strategy), cost_(cost) {
     if (bvh.empty()) return;
     const size_t count = bvh.nodes.size();
@@ -62,7 +62,7 @@ CollapsePlan::CollapsePlan(const Scene& scene, const Bvh& bvh, int width, WideCo
         const BvhNode& n = bvh.nodes[node];
         std::vector<uint32_t>& set = sets[node];
         if (n.is_leaf()) {
-            append_live_triangles(scene, bvh, n, set);
+            append_live_triangles(triangles, bvh, n, set);
             sort_unique(set);
             distinct_[node] = uint32_t(set.size());  // exact for a leaf: it stays a leaf whatever its size
         } else {

@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <vector>
 
+#include <span>
+
 #include "spacebvh/bvh.hpp"
-#include "spacebvh/scene.hpp"
-#include "spacebvh/wide_tracer.hpp"
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/trace.hpp"
 
 namespace spacebvh::trace {
 
@@ -34,7 +36,7 @@ struct WideCost {
 
 class CollapsePlan {
 public:
-    CollapsePlan(const Scene& scene, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost = {});
+    CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost = {});
 
     // The children of the wide node made for binary inner node `node`, left to right.
     std::vector<CollapseSlot> slots(uint32_t node) const;
@@ -62,6 +64,6 @@ private:
 };
 
 // The distinct non-degenerate triangles of all leaves under binary node `node`, ascending.
-std::vector<uint32_t> subtree_triangles(const Scene& scene, const Bvh& bvh, uint32_t node);
+std::vector<uint32_t> subtree_triangles(std::span<const Triangle> triangles, const Bvh& bvh, uint32_t node);
 
 }  // namespace spacebvh::trace

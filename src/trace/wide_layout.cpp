@@ -52,8 +52,8 @@ void order_slots_by_size(WideNode<W>& node, const uint64_t (&lanes)[W]) {
 template <int W>
 class Collapser {
 public:
-    Collapser(const Scene& scene, const Bvh& bvh, WideLayout<W>& layout, WideCollapse collapse)
-        : scene_(scene), bvh_(bvh), layout_(layout), plan_(scene, bvh, W, collapse), packer_(scene, bvh, layout.packs) {}
+    Collapser(std::span<const Triangle> triangles, const Bvh& bvh, WideLayout<W>& layout, WideCollapse collapse)
+        : triangles_(triangles), bvh_(bvh), layout_(layout), plan_(triangles, bvh, W, collapse), packer_(triangles, bvh, layout.packs) {}
 
     struct MadeNode {
         uint32_t index;  // of its WideNode
@@ -72,7 +72,7 @@ public:
             if (!children[slot].leaf) continue;
             const BvhNode& child = bvh_.nodes[children[slot].node];
             const auto [first, count] =
-                child.is_leaf() ? packer_.add(child) : packer_.add(subtree_triangles(scene_, bvh_, children[slot].node));
+                child.is_leaf() ? packer_.add(child) : packer_.add(subtree_triangles(triangles_, bvh_, children[slot].node));
             set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
             lanes[slot] = count;
         }
@@ -90,7 +90,7 @@ public:
     }
 
 private:
-    const Scene& scene_;
+    std::span<const Triangle> triangles_;
     const Bvh& bvh_;
     WideLayout<W>& layout_;
     CollapsePlan plan_;
@@ -100,7 +100,7 @@ private:
 }  // namespace
 
 template <int W>
-WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh, WideCollapse collapse) {
+WideLayout<W> collapse_to_wide(std::span<const Triangle> triangles, const Bvh& bvh, WideCollapse collapse) {
     WideLayout<W> layout;
     if (bvh.empty()) {
         layout.nodes.push_back(empty_node<W>());  // nothing to hit
@@ -108,11 +108,11 @@ WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh, WideCollapse 
     }
     layout.nodes.reserve(bvh.nodes.size() / (W - 1) + 1);
     layout.packs.reserve(bvh.primitives.size() / 4 + 1);
-    Collapser<W>(scene, bvh, layout, collapse).make_node(0);
+    Collapser<W>(triangles, bvh, layout, collapse).make_node(0);
     return layout;
 }
 
-template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&, WideCollapse);
-template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&, WideCollapse);
+template WideLayout<4> collapse_to_wide<4>(std::span<const Triangle>, const Bvh&, WideCollapse);
+template WideLayout<8> collapse_to_wide<8>(std::span<const Triangle>, const Bvh&, WideCollapse);
 
 }  // namespace spacebvh::trace

@@ -4,10 +4,12 @@
 #include <cstdint>
 #include <vector>
 
+#include <span>
+
 #include "spacebvh/bvh.hpp"
-#include "spacebvh/scene.hpp"
+#include "spacebvh/geometry.hpp"
 #include "trace/huge_page_allocator.hpp"
-#include "spacebvh/wide_tracer.hpp"
+#include "spacebvh/trace.hpp"
 #include "trace/triangle_pack.hpp"
 
 namespace spacebvh::trace {
@@ -39,9 +41,9 @@ struct WideLayout {
 // (wide_collapse.hpp). Nodes are laid out depth first, a node's first inner child right after it.
 // Degenerate triangles are dropped (never hit); a leaf of degenerate triangles only gets an empty box.
 template <int W>
-WideLayout<W> collapse_to_wide(const Scene& scene, const Bvh& bvh, WideCollapse collapse);
+WideLayout<W> collapse_to_wide(std::span<const Triangle> triangles, const Bvh& bvh, WideCollapse collapse);
 
-extern template WideLayout<4> collapse_to_wide<4>(const Scene&, const Bvh&, WideCollapse);
-extern template WideLayout<8> collapse_to_wide<8>(const Scene&, const Bvh&, WideCollapse);
+extern template WideLayout<4> collapse_to_wide<4>(std::span<const Triangle>, const Bvh&, WideCollapse);
+extern template WideLayout<8> collapse_to_wide<8>(std::span<const Triangle>, const Bvh&, WideCollapse);
 
 }  // namespace spacebvh::trace

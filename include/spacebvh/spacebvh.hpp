@@ -1,0 +1,12 @@
+// SPDX-License-Identifier: MIT
+// spacebvh: BVHs by space subdivision (Popov, Georgiev, Dimov, Slusallek 2009) with exact traversal.
+// The core API: a mesh view, a build configuration (or a quality level), the tree, and a tracer.
+#pragma once
+
+#include "spacebvh/build.hpp"
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/cost_model.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/mesh.hpp"
+#include "spacebvh/trace.hpp"

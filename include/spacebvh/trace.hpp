@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: MIT
+// Tracing rays through a built tree: one tracer type over every kernel. Answers are exact (equal to
+// the exact arbiter, docs/design.md "Triangles") whatever the kernel; kernels differ only in speed
+// and in the work counted by TraversalStats.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/mesh.hpp"
+
+namespace spacebvh {
+
+struct Hit {
+    float t = kInfinity;                 // +inf for a miss
+    uint32_t primitive = kInvalidIndex;  // triangle id in mesh order; kInvalidIndex for a miss
+    float u = 0.0f, v = 0.0f;            // barycentrics of v1 and v2
+
+    bool is_hit() const { return primitive != kInvalidIndex; }
+};
+
+// Work done by one or many rays (the statistics mode).
+struct TraversalStats {
+    uint64_t nodes_visited = 0;     // child boxes tested
+    uint64_t triangles_tested = 0;  // ray-triangle tests
+    TraversalStats& operator+=(const TraversalStats& o) {
+        nodes_visited += o.nodes_visited;
+        triangles_tested += o.triangles_tested;
+        return *this;
+    }
+};
+
+// The traversal kernels.
+enum class Kernel {
+    automatic,  // the fastest single-ray kernel on this machine (bvh8 with its widest node test)
+    binary,     // compact binary nodes, both child boxes in one SSE test: the reference kernel
+    bvh4,       // 4-wide nodes (Wald, Benthin, Boulos 2008; Dammertz et al. 2008)
+    bvh8,       // 8-wide nodes
+    packet8,    // packets of 64 consecutive rays (an 8x8 tile) over 8-wide nodes (Wald et al. 2007)
+    packet16,   // packets of 256 consecutive rays (16x16)
+};
+
+// The instructions that test a wide node's child boxes. Triangles are tested four at a time with SSE
+// in every non-scalar kernel.
+enum class NodeTest {
+    best,    // the fastest this CPU has for the width
+    scalar,  // plain C++ loops: the reference (also tests triangles one at a time)
+    sse,     // 4 lanes (width 4)
+    avx2,    // 8 lanes (width 8)
+    avx512,  // AVX-512VL mask compares and compress-store of the hit children (width 4 and 8)
+};
+
+// How a binary tree is collapsed into wide nodes.
+enum class WideCollapse {
+    // Ylitie, Karras, Laine 2017: the cheapest cut of the binary tree into wide nodes under a wide
+    // SAH, found by dynamic programming; small subtrees may become one leaf.
+    sah_optimal,
+    // Embree's: from a node's two children, open the child of largest surface area until full.
+    largest_area,
+};
+
+struct TracerConfig {
+    Kernel kernel = Kernel::automatic;
+    NodeTest node_test = NodeTest::best;               // wide and packet kernels
+    WideCollapse collapse = WideCollapse::sah_optimal;  // wide and packet kernels
+    uint32_t packet_size = 0;  // packet kernels: rays per packet, 1..256; 0 = the kernel's tile (64, 256)
+};
+
+const char* to_string(Kernel kernel);          // "bvh8"
+const char* to_string(NodeTest test);          // "avx2"
+const char* to_string(WideCollapse collapse);  // "sah", "area"
+// The node tests available for `width` (4 or 8) on this CPU, "best" excluded, slowest first.
+std::vector<NodeTest> supported_node_tests(int width);
+
+class Tracer {
+public:
+    // Lays the tree and the mesh's triangles out for the kernel (the tracer keeps its own copy of the
+    // triangles; mesh and bvh may go afterwards). Throws Error for a node test this CPU or kernel
+    // lacks, or a tree that does not belong to the mesh (a triangle id out of range).
+    Tracer(const MeshView& mesh, const Bvh& bvh, Kernel kernel = Kernel::automatic);
+    Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& config);
+    ~Tracer();
+    Tracer(Tracer&&) noexcept;
+    Tracer& operator=(Tracer&&) noexcept;
+
+    // Closest hit and any hit (occlusion) of one ray, for t in [ray.tmin, ray.tmax].
+    Hit intersect(const Ray& ray) const;
+    Hit intersect(const Ray& ray, TraversalStats& stats) const;
+    bool occluded(const Ray& ray) const;
+    bool occluded(const Ray& ray, TraversalStats& stats) const;
+
+    // Batches across the calling thread's oneTBB arena; packet kernels trace consecutive rays
+    // together (put the rays of an image tile next to each other: tile_order). `stats`, when given,
+    // receives the totals.
+    void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats = nullptr) const;
+    void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const;
+
+    size_t memory_bytes() const;  // nodes + leaf triangle data
+    size_t node_count() const;    // nodes of the layout
+    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "packet8-avx512@area"
+    const TracerConfig& config() const;  // with node_test resolved
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+// The order that groups the rays of a row-major width x height image into tile x tile blocks, blocks
+// row-major; edge blocks are smaller. order[k] is the index of the k-th ray to trace.
+std::vector<uint32_t> tile_order(uint32_t width, uint32_t height, uint32_t tile);
+
+}  // namespace spacebvh

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: MIT
+#include "builders/search_spaces.hpp"
+
+#include "builders/binned_object_split_finder.hpp"
+#include "builders/binned_spatial_split_finder.hpp"
+#include "builders/grid_split_finder.hpp"
+#include "builders/object_sweep_split_finder.hpp"
+#include "builders/spatial_sweep_split_finder.hpp"
+
+namespace spacebvh::builders {
+
+std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t spaces, std::span<const Triangle> triangles,
+                                                             const BuildConfig& config, bool allow_unsplitting,
+                                                             float spatial_gate_alpha) {
+    std::vector<std::unique_ptr<SplitFinder>> finders;
+    if (spaces & uint32_t(SearchSpace::object_sweep)) finders.push_back(std::make_unique<ObjectSweepSplitFinder>());
+    if (spaces & uint32_t(SearchSpace::object_binned))
+        finders.push_back(std::make_unique<BinnedObjectSplitFinder>(config.object.bins));
+    if (spaces & uint32_t(SearchSpace::spatial_binned)) {
+        SpatialSearchOptions spatial;
+        spatial.bins = config.spatial.bins;
+        spatial.unsplit = config.spatial.unsplitting && allow_unsplitting;
+        spatial.gate_alpha = spatial_gate_alpha;
+        finders.push_back(std::make_unique<BinnedSpatialSplitFinder>(triangles, spatial));
+    }
+    if (spaces & uint32_t(SearchSpace::spatial_sweep)) {
+        SpatialSweepOptions sweep;
+        sweep.unsplit = config.spatial.unsplitting && allow_unsplitting;
+        sweep.interior_samples = config.spatial.sweep_interior_samples;
+        sweep.gate_alpha = spatial_gate_alpha;
+        finders.push_back(std::make_unique<SpatialSweepSplitFinder>(triangles, sweep));
+    }
+    if (spaces & uint32_t(SearchSpace::grid)) {
+        GridSearchOptions grid;
+        grid.resolution = config.grid.resolution;
+        grid.max_cells = config.grid.max_cells;
+        grid.split_primitives = config.grid.splitting;
+        finders.push_back(std::make_unique<GridSplitFinder>(triangles, grid));
+    }
+    return finders;
+}
+
+bool splits_references(uint32_t spaces, const BuildConfig& config) {
+    return (spaces & (SearchSpace::spatial_binned | SearchSpace::spatial_sweep)) ||
+           ((spaces & uint32_t(SearchSpace::grid)) && config.grid.splitting);
+}
+
+}  // namespace spacebvh::builders

@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: MIT
+#include "spacebvh/mesh.hpp"
+
+#include <cmath>
+
+#include "spacebvh/error.hpp"
+
+namespace spacebvh {
+namespace {
+
+template <typename Coordinate, typename Index>
+std::vector<Triangle> expand(std::span<const Coordinate> xyz, std::span<const Index> indices, const std::string& name) {
+    const std::string what = "mesh '" + name + "'";
+    if (xyz.size() % 3 != 0)
+        throw Error(what + ": " + std::to_string(xyz.size()) + " vertex coordinates, not a multiple of 3");
+    if (indices.size() % 3 != 0) throw Error(what + ": " + std::to_string(indices.size()) + " indices, not a multiple of 3");
+    const size_t vertex_count = xyz.size() / 3;
+    for (size_t i = 0; i < xyz.size(); ++i)
+        if (!std::isfinite(xyz[i]) || !std::isfinite(float(xyz[i])))
+            throw Error(what + ": vertex " + std::to_string(i / 3) + " has a coordinate that is not finite in float");
+    auto vertex = [&](size_t triangle, int corner) {
+        const Index index = indices[3 * triangle + corner];
+        if (index < 0 || uint64_t(index) >= vertex_count)
+            throw Error(what + ": triangle " + std::to_string(triangle) + " uses vertex " + std::to_string(index) +
+                        ", outside 0.." + std::to_string(int64_t(vertex_count) - 1));
+        return Vec3{float(xyz[3 * index]), float(xyz[3 * index + 1]), float(xyz[3 * index + 2])};
+    };
+    std::vector<Triangle> triangles;
+    triangles.reserve(indices.size() / 3);
+    for (size_t t = 0; t < indices.size() / 3; ++t) triangles.push_back({vertex(t, 0), vertex(t, 1), vertex(t, 2)});
+    return triangles;
+}
+
+void check_soup(std::span<const Triangle> soup, const std::string& name) {
+    for (size_t t = 0; t < soup.size(); ++t)
+        if (!is_finite(soup[t].v0) || !is_finite(soup[t].v1) || !is_finite(soup[t].v2))
+            throw Error("mesh '" + name + "': triangle " + std::to_string(t) + " has a coordinate that is not finite");
+}
+
+}  // namespace
+
+size_t MeshView::triangle_count() const {
+    if (is_soup()) return soup_.size();
+    return (u32_indices_.empty() ? i64_indices_.size() : u32_indices_.size()) / 3;
+}
+
+std::vector<Triangle> MeshView::triangles() const {
+    if (is_soup()) {
+        check_soup(soup_, name_);
+        return {soup_.begin(), soup_.end()};
+    }
+    if (double_xyz_.empty())
+        return u32_indices_.empty() ? expand(float_xyz_, i64_indices_, name_) : expand(float_xyz_, u32_indices_, name_);
+    return u32_indices_.empty() ? expand(double_xyz_, i64_indices_, name_) : expand(double_xyz_, u32_indices_, name_);
+}
+
+TriangleStore::TriangleStore(const MeshView& mesh) {
+    if (mesh.is_soup()) {
+        check_soup(mesh.soup(), mesh.name());
+        triangles_ = mesh.soup();
+    } else {
+        owned_ = mesh.triangles();
+        triangles_ = owned_;
+    }
+}
+
+}  // namespace spacebvh

@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: MIT
+#include "spacebvh/error.hpp"
+#include "spacebvh/presets.hpp"
+
+namespace spacebvh {
+namespace {
+
+constexpr NodeTest kNodeTests[] = {NodeTest::scalar, NodeTest::sse, NodeTest::avx2, NodeTest::avx512};
+constexpr Kernel kWideKernels[] = {Kernel::bvh4, Kernel::bvh8, Kernel::packet8, Kernel::packet16};
+
+int width_of(Kernel kernel) { return kernel == Kernel::bvh4 ? 4 : 8; }
+
+}  // namespace
+
+TracerConfig parse_kernel(const std::string& name) {
+    // A wide kernel may end in "@area": Embree's collapse instead of the SAH-optimal one.
+    std::string kernel = name;
+    TracerConfig config;
+    bool collapse_given = false;
+    if (const size_t at = kernel.find('@'); at != std::string::npos) {
+        const std::string suffix = kernel.substr(at + 1);
+        kernel.resize(at);
+        if (suffix == "area") config.collapse = WideCollapse::largest_area;
+        else if (suffix != "sah") throw Error("unknown kernel '" + name + "': a wide kernel takes a collapse, @sah or @area");
+        collapse_given = true;
+    }
+    if (kernel == "binary" && !collapse_given) return TracerConfig{Kernel::binary};
+    if (kernel == "auto") return TracerConfig{Kernel::automatic, NodeTest::best, config.collapse};
+    for (Kernel wide : kWideKernels) {
+        const std::string prefix = to_string(wide);
+        config.kernel = wide;
+        if (kernel == prefix) return config;
+        for (NodeTest test : kNodeTests) {
+            config.node_test = test;
+            if (kernel == prefix + "-" + to_string(test)) return config;
+        }
+        config.node_test = NodeTest::best;
+    }
+    std::string known;
+    for (const std::string& known_name : kernel_names()) known += " " + known_name;
+    throw Error("unknown kernel '" + name + "'; kernels on this CPU:" + known + " (wide ones also NAME@area)");
+}
+
+std::vector<std::string> kernel_names() {
+    std::vector<std::string> names{"auto", "binary"};
+    for (Kernel wide : kWideKernels) {
+        const std::string prefix = to_string(wide);
+        names.push_back(prefix);
+        for (NodeTest test : supported_node_tests(width_of(wide)))
+            if (!((wide == Kernel::packet8 || wide == Kernel::packet16) && test == NodeTest::sse))
+                names.push_back(prefix + "-" + to_string(test));
+    }
+    return names;
+}
+
+std::unique_ptr<Tracer> make_tracer(const std::string& kernel, const MeshView& mesh, const Bvh& bvh) {
+    return std::make_unique<Tracer>(mesh, bvh, parse_kernel(kernel));
+}
+
+}  // namespace spacebvh
