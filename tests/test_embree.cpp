@@ -1,4 +1,4 @@
-// The Embree adapter against the exact arbiter of ../shared/spec/rays.md.
+// The Embree adapter against the exact arbiter of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Ray sets and files of ../shared/spec/rays.md.
+// Ray sets and files of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include <cmath>

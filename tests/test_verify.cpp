@@ -1,4 +1,4 @@
-// The exact arbiter and the agreement rule of ../shared/spec/rays.md.
+// The exact arbiter and the agreement rule of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"

@@ -1,4 +1,4 @@
-// spacebvh rays SCENE --kind random|primary|diffuse: write a ray file (../shared/spec/rays.md).
+// spacebvh rays SCENE --kind random|primary|diffuse: write a ray file (docs/rays.md).
 #include <cstdio>
 
 #include "cli_common.hpp"

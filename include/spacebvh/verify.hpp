@@ -1,4 +1,4 @@
-// Checking answers ray by ray, as ../shared/spec/rays.md defines it: agreement of two hit records,
+// Checking answers ray by ray, as docs/rays.md defines it: agreement of two hit records,
 // and the exact double-precision arbiter that settles disagreements.
 #pragma once
 

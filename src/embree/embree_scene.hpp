@@ -37,7 +37,7 @@ void check_embree(RTCDevice device, const char* what);
 // time of rtcCommitScene alone, as in embree-measured.md ("embree build ms"). For a median of several
 // builds, construct several times.
 //
-// Queries are const and thread-safe. Rays follow ../shared/spec/rays.md: t in [tmin, tmax] in units
+// Queries are const and thread-safe. Rays follow docs/rays.md: t in [tmin, tmax] in units
 // of |dir| (Embree's tnear/tfar), so Hit::t is directly comparable with ours.
 class EmbreeScene {
 public:

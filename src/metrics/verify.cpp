@@ -1,4 +1,4 @@
-// Ray-by-ray checking of ../shared/spec/rays.md ("Files": agreement rule and arbiter).
+// Ray-by-ray checking of docs/rays.md ("Agreement and the arbiter").
 #include "spacebvh/verify.hpp"
 
 #include <algorithm>

@@ -14,7 +14,7 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 const SceneTransform kInteriorRotation{Vec3(45.0f, 45.0f, 45.0f), 1.0f, Vec3(0.0f)};
 
-// splitmix64 (Steele, Lea & Flood 2014), as in ../shared/spec/rays.md.
+// splitmix64 (Steele, Lea & Flood 2014), as in docs/rays.md.
 struct SplitMix64 {
     uint64_t state;
     uint64_t next() {

@@ -1,4 +1,4 @@
-// Cameras: parsing, the default camera of ../shared/spec/rays.md and the MANIFEST camera table.
+// Cameras: parsing, the default camera of docs/rays.md and the MANIFEST camera table.
 #include <filesystem>
 #include <fstream>
 

@@ -143,7 +143,7 @@ std::unique_ptr<Tracer> make_tracer(const std::string& name, const Scene& scene,
         }
     }
     if (kernel == "binary") return std::make_unique<BinaryTracer>(scene, bvh);
-    // The fastest single-ray kernel measured (bench/RESULTS.md): 8 wide with the widest node test.
+    // The fastest single-ray kernel on the benchmark scenes (bench/): 8 wide with the widest node test.
     if (kernel == "auto") return std::make_unique<WideTracer>(scene, bvh, 8, NodeTest::best, collapse);
     for (int width : {4, 8}) {
         const std::string prefix = "bvh" + std::to_string(width);
