@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""The C_o tables of bench/RESULTS.md, "Issue #3, session 14".
+"""The C_o sweep tables from bench/co_sweep.sh.
 
 Reads `spacebvh compare --json` files, one per run and scene, found by a pattern with `{scene}` in it
-(default: co_SCENE_N.json beside this script; bench/co_sweep.sh writes co_sweep_SCENE_N.json), and
+(default: bench/out/co_sweep_SCENE_N.json, as bench/co_sweep.sh writes them), and
 prints per scene and row the SAH, EPO, references and the median over runs of the row's Mrays/s
 divided by the first row's in the same run (random, primary, diffuse; closest hit, then occlusion).
 """
@@ -23,7 +23,7 @@ def tree_rows(run):
 
 
 def main():
-    pattern = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "co_{scene}_[0-9]*.json")
+    pattern = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "out", "co_sweep_{scene}_[0-9]*.json")
     for scene in SCENES:
         files = sorted(glob.glob(pattern.format(scene=scene)))
         if not files:

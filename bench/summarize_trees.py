@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue #3's tree goals from `spacebvh compare --json` files (bench/issue3_shared_scenes.sh).
+"""The space-subdivision trees' ratio table from `spacebvh compare --json` files (bench/trees_shared_scenes.sh).
 
 Per scene and kernel, from rows measured side by side in one run: `spatial` (default settings) /
 `embree-high` (Embree HIGH's binary tree under the same kernel), goal >= 1.05; `spatial` / the best of
@@ -8,7 +8,7 @@ diffuse rays, rotated >= 2); closest hits for random, primary and diffuse rays, 
 below its goal is bold.
 Then SAH (spatial below cbvh?), references / triangles (<= 1.3), and the wrong answers of all our rows
 (both kernels, every tree) and of Embree's own kernel.
-Usage: python3 bench/summarize_issue3.py bench/issue3_*.json
+Usage: python3 bench/summarize_trees.py bench/out/trees_*.json
 """
 import json
 import os
@@ -40,7 +40,7 @@ def main(paths):
     for path in sorted(paths):
         data = json.load(open(path))
         scene = data["scenes"][0]
-        name = os.path.basename(path).removeprefix("issue3_").removesuffix(".json")
+        name = os.path.basename(path).removeprefix("trees_").removesuffix(".json")
         rows = [r for r in scene["rows"] if not r["kernel"].startswith("Embree")]
         wrong = sum(r[k]["wrong"] for r in rows for k in KINDS if r[k].get("wrong") is not None)
         embree_wrong = sum(r[k]["wrong"] for r in scene["rows"] if r["kernel"].startswith("Embree") for k in KINDS
