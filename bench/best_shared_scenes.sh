@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Our best trees against Embree's best kernel: per shared scene (and crytek_sponza rotated 45/45/45),
 # the reinsertion-optimised `cbvh+opt` and `spatial+opt` trees, plain SAH and with leaf blocks of
 # four (`@block=4;ct=2`: the SAH prices leaves by the packs of four the kernels test, as Embree's

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The overlap-penalty (C_o) sweep under the BVH8 kernel: `spacebvh compare` on crytek_sponza and
 # crytek_sponza rotated 45/45/45 with cbvh and `spatial` at C_o = 0, 0.1, 0.3, 1, 3, 10, inf; refs,
 # SAH, EPO and Mrays/s per ray kind. Answers are not checked here (--embree none: no reference rows);

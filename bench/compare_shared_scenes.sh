@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The all-builders table. `spacebvh compare` with 2 threads (medians of 5 runs, builds the
 # median of 3) over every shared scene and crytek_sponza rotated 45/45/45: all builders under our
 # kernel (Embree's own binary trees included), Embree 3's own kernel as rows, and every answer

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Runs `spacebvh compare ARGS...` once per shared scene (one process per scene, so every row of a
 # scene's table is measured side by side), writing $BENCH_OUT/PREFIX_STEM.json (default bench/out/)
 # and printing the tables.

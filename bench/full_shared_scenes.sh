@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The Full search against the others: full, kdbvh, spatial and cbvh on the shared scenes (SAH, EPO, refs,
 # build time, peak memory, Mrays/s per ray kind with the default kernels), 2 threads, one run per
 # scene; JSON per scene in bench/out/ ($BENCH_OUT).

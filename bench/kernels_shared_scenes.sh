@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The kernel benchmark: per shared scene (and crytek_sponza rotated
 # 45/45/45), our kernels on our best tree (`spatial`) against Embree 3 in the same run, 2 threads:
 # binary (the scalar reference), BVH4, BVH8 (widest node test) and 8x8 / 16x16 packets, Embree HIGH

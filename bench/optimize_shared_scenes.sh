@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The reinsertion optimiser (--optimize, src/builders/reinsertion_optimizer.hpp) on the shared scenes and
 # crytek_sponza rotated 45/45/45: binned, binned+opt, cbvh+opt, spatial and spatial+opt under the BVH8
 # kernel, next to Embree HIGH's own single-ray kernel (rtcIntersect1 / rtcOccluded1), all on the same

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The best-trees ratio table from `spacebvh compare --json` files (bench/best_shared_scenes.sh).
 
 Per scene and ray kind: our fastest row (any builder, any kernel) / Embree HIGH rtcIntersect1 or

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The C_o sweep tables from bench/co_sweep.sh.
 
 Reads `spacebvh compare --json` files, one per run and scene, found by a pattern with `{scene}` in it

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """The space-subdivision trees' ratio table from `spacebvh compare --json` files (bench/trees_shared_scenes.sh).
 
 Per scene and kernel, from rows measured side by side in one run: `spatial` (default settings) /

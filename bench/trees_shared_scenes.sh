@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # The space-subdivision trees under both kernels: `spatial` (default settings) against `sbvh`, `esc`, `evh`,
 # `cbvh` and Embree HIGH's own binary tree (`embree-high`), each tree traced by our binary kernel and
 # by our BVH8 kernel, per shared scene and crytek_sponza rotated 45/45/45, 2 threads, medians of 5

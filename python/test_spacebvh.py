@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Tests of the Python module against an independent NumPy brute force (double-precision
 Moller-Trumbore over every triangle). Run by CTest (`python_module`) with the built module on
 PYTHONPATH: python3 python/test_spacebvh.py"""

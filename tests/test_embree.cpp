@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Embree adapter against the exact arbiter of docs/rays.md.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray sets and files of docs/rays.md.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, BuildOptions::reinsertion_iterations,
 // optimize_bvh): the tree SAH never rises and falls where there is something to gain, the gains are
 // priced exactly, the trees stay valid (depth cap included) and answer like the arbiter, the result

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The binary tracer (include/spacebvh/tracer.hpp): watertightness on closed meshes, axis-parallel rays
 // and rays in slab planes, the ray segment [tmin, tmax], degenerate triangles, statistics, the batch
 // API, and unusual trees (empty, a single leaf, very deep), each checked against the exact arbiter of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exact arbiter and the agreement rule of docs/rays.md.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh compare [SCENE...]: the main job. Per scene, every builder (under each --kernel) and Embree
 // (single rays and 16-ray packets) side by side on the same rays: build time, tree quality, Mrays/s
 // (median of --runs) and work per ray for random, primary and diffuse rays, each also as a ratio to

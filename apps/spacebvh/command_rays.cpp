@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh rays SCENE --kind random|primary|diffuse: write a ray file (docs/rays.md).
 #include <cstdio>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The three ray sets of docs/rays.md for one scene, made the same way by `rays` and `compare`.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Basic geometry: vectors, axis-aligned boxes, rays and triangles (float32, as the ray files of
 // docs/rays.md). Kept header-only and small: every module includes it.
 #pragma once

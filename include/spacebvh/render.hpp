@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Pictures of a scene through a tracer: a shaded view (to see what is traced) and a cost heat map
 // (to see where the tree makes rays work), both with the primary rays of docs/rays.md.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Checking answers ray by ray, as docs/rays.md defines it: agreement of two hit records,
 // and the exact double-precision arbiter that settles disagreements.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/object_sweep_split_finder.hpp"
 
 #include <immintrin.h>

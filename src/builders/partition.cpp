@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/partition.hpp"
 
 #include <algorithm>

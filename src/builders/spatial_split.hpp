@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The one implementation of reference clipping behind every spatial search space: cutting a
 // reference (a triangle restricted to its current bounds) at an axis-aligned plane.
 #pragma once

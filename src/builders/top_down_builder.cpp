@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/top_down_builder.hpp"
 
 #include <tbb/parallel_for.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Embree 3 as the yardstick: the same scene, the same rays, Embree's own BVHs and kernels.
 // See ../shared/research/embree-measured.md for how the reference figures were taken; this adapter
 // reproduces that setup (rtcIntersect1 / rtcOccluded1, oneTBB chunks of 1024 rays).

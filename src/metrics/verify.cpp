@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray-by-ray checking of docs/rays.md ("Agreement and the arbiter").
 #include "spacebvh/verify.hpp"
 

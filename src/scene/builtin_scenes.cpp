@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Procedural scenes, generated without files and deterministic (no std distributions, no clocks):
 //   interior          an architectural hall: floor, walls and gabled roof split into long thin strips,
 //                     columns, arches and slanted roof beams (the case where object partitioning does badly)

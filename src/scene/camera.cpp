@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Cameras: parsing, the default camera of docs/rays.md and the MANIFEST camera table.
 #include <filesystem>
 #include <fstream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal pieces shared by the scene loaders (not installed): file reading, error formatting,
 // number parsing and the load-time transform as a precomputed matrix.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The load-time transform (docs/rays.md, "Scene conventions"): R = Rz(c) * Ry(b) * Rx(a),
 // degrees, about the origin; then scale; then translate.
 #include <cctype>

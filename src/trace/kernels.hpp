@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The compiled kernels (kernel_instances.cpp): one copy per instruction set, looked up at run time.
 // WideTracer and PacketTracer hold the table of the node test they were asked for.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "spacebvh/packet_tracer.hpp"
 
 #include "spacebvh/error.hpp"

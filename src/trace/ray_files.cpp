@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray and hit files of docs/rays.md ("Ray file", "Hit file"): 8 bytes magic, uint64 count, then fixed-size
 // little-endian records. Values are encoded byte by byte so the files are the same on any host.
 #include <algorithm>

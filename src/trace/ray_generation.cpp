@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Ray sets of docs/rays.md ("Random numbers", "Ray kinds"), reproduced bit for bit.
 //
 // This file is compiled with -ffp-contract=off (see CMakeLists.txt): no fused multiply-add, so every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What every traversal kernel shares: the conservative box-test constants, the floating-point mode the
 // kernels run in, and the parallel loop over a batch of rays.
 #pragma once

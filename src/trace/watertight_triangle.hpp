@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Watertight ray-triangle intersection (Woop, Benthin, Wald, "Watertight Ray/Triangle
 // Intersection", JCGT 2013), in float, with a forward error bound: when an edge function is too close
 // to zero for its sign to be trusted, the exact double-precision test of verify.hpp decides. The

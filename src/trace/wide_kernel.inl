@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The single-ray kernels of wide BVHs, written once over a node-test policy `S`. kernel_instances.cpp
 // includes this file once per instruction set, inside a namespace that defines the policies and under
 // `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.

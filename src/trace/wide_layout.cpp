@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "trace/wide_layout.hpp"
 
 #include <algorithm>

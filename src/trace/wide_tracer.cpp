@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // WideTracer: the collapsed layout plus the single-ray kernels of the chosen node test.
 #include "spacebvh/wide_tracer.hpp"
 
