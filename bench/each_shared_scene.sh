@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Runs `spacebvh compare ARGS...` once per shared scene (one process per scene, so every row of a
-# scene's table is measured side by side), writing bench/PREFIX_STEM.json and printing the tables.
+# scene's table is measured side by side), writing $BENCH_OUT/PREFIX_STEM.json (default bench/out/)
+# and printing the tables.
 # Stems: bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated (crytek_sponza
 # rotated 45/45/45), or those in $STEMS. Used by bench/PREFIX_shared_scenes.sh, whose command line
 # it prints first.
@@ -10,6 +12,8 @@ prefix=$1
 shift
 scenes=../shared/scenes
 cli=./build/spacebvh
+out=${BENCH_OUT:-bench/out}
+mkdir -p "$out"
 echo "Command: \`bash bench/${prefix}_shared_scenes.sh\` (compare $*)"
 echo
 read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated}"
@@ -19,5 +23,5 @@ for stem in "${stems[@]}"; do
     else
         scene=("$stem/$stem.obj")
     fi
-    "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "bench/${prefix}_$stem.json" | grep -v '^# '
+    "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "$out/${prefix}_$stem.json" | grep -v '^# '
 done

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
 """Build time of a builder versus N on growing subsets of a scene, with the fitted exponent.
 
 Subsets keep every k-th triangle of the OBJ (so each has the whole scene's spatial spread), for

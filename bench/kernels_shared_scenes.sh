@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The kernel benchmark of bench/RESULTS.md (issue #5): per shared scene (and crytek_sponza rotated
+# SPDX-License-Identifier: MIT
+# The kernel benchmark: per shared scene (and crytek_sponza rotated
 # 45/45/45), our kernels on our best tree (`spatial`) against Embree 3 in the same run, 2 threads:
 # binary (the scalar reference), BVH4, BVH8 (widest node test) and 8x8 / 16x16 packets, Embree HIGH
 # and MEDIUM with rtcIntersect1/rtcOccluded1 and HIGH with rtcIntersect16/rtcOccluded16 (primary rays

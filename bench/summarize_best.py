@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Issue #5's ratio table from `spacebvh compare --json` files (bench/best_shared_scenes.sh).
+# SPDX-License-Identifier: MIT
+"""The best-trees ratio table from `spacebvh compare --json` files (bench/best_shared_scenes.sh).
 
 Per scene and ray kind: our fastest row (any builder, any kernel) / Embree HIGH rtcIntersect1 or
 rtcOccluded1, next to the goal max(1.0, tinybvh / Embree at 2 threads from

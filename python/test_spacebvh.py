@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Tests of the Python module against an independent NumPy brute force (double-precision
 Moller-Trumbore over every triangle). Run by CTest (`python_module`) with the built module on
 PYTHONPATH: python3 python/test_spacebvh.py"""
@@ -385,7 +386,7 @@ class TracingTests(unittest.TestCase):
         with tempfile.TemporaryDirectory() as folder:
             rays_path, hits_path = os.path.join(folder, "r.rays"), os.path.join(folder, "h.hits")
             spacebvh.write_rays(rays_path, self.origins[:n], self.directions[:n], tmin, np.inf)
-            # The layout of ../shared/spec/rays.md, read independently of the module.
+            # The layout of docs/rays.md, read independently of the module.
             raw = pathlib.Path(rays_path).read_bytes()
             self.assertEqual(raw[:8], b"REFRAYS1")
             self.assertEqual(int.from_bytes(raw[8:16], "little"), n)

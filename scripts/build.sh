@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Configures and builds spacebvh (Release, -O3 -march=native) into ./build.
 # SPACEBVH_PORTABLE=1 builds without -march=native.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # Installs what spacebvh needs to build and test on Debian 12, from Debian packages only.
 # Safe to run again: apt-get skips what is already installed.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # README command (a): install, build, and run the main job (`spacebvh compare`) on the built-in
 # default scene. Extra arguments go to `spacebvh compare`.
 set -euo pipefail

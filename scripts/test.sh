@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
 # README command (b): install, build, and run every test (GoogleTest through CTest).
 set -euo pipefail
 cd "$(dirname "$0")/.."

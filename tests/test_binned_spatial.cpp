@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The binned spatial search space (src/builders/binned_spatial_split_finder.hpp): its bins against the
 // exact clipping of apply_split, and when its search is skipped (the budget and alpha gates).
 #include <gtest/gtest.h>

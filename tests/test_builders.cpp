@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: MIT
 // The builders (include/spacebvh/bvh.hpp) on every builtin scene: tree invariants, answers of the
-// binary tracer against Embree with the exact arbiter settling disagreements (../shared/spec/rays.md),
+// binary tracer against Embree with the exact arbiter settling disagreements (docs/rays.md),
 // determinism across thread counts, the build options, and edge-case scenes.
 #include <gtest/gtest.h>
 

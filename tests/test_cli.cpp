@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The `spacebvh` command-line tool (apps/spacebvh), run as a separate process in a temporary
 // directory: help, every subcommand on a builtin scene, the files it writes (JSON, ray and hit files,
 // PNG), and clean failures (exit code 1 or 2 with a message naming the problem, never a crash).

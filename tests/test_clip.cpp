@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Clipping of triangles against boxes and split planes (src/core/clip.cpp): the hand-checked cases,
 // the robustness cases the spatial-split builders rely on, and randomized containment and area tests.
 #include <gtest/gtest.h>

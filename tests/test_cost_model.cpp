@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The cost model of include/spacebvh/cost_model.hpp: the split cost formula with its overlap penalty
 // (Popov et al. 2009), the overlap fraction for solid and flat nodes, validation and the description.
 #include <gtest/gtest.h>

@@ -1,4 +1,5 @@
-// The Embree adapter against the exact arbiter of ../shared/spec/rays.md.
+// SPDX-License-Identifier: MIT
+// The Embree adapter against the exact arbiter of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include <cmath>

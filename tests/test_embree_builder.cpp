@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Embree's binary trees imported into our Bvh (src/embree/embree_builder.hpp): structure, the
 // reference budget, answers of our tracer over them, and tree quality.
 #include <gtest/gtest.h>

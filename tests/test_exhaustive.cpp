@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exhaustive optimum (src/builders/exhaustive_split.hpp): equal to a naive enumeration, and never
 // beaten by an object-partitioning search space (object sweep, binned object, grid without
 // splitting) under the same cost model, for plain SAH, a finite overlap penalty and C_o = inf.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The grid search space (src/builders/grid_split_finder.hpp): its containment counts and its best
 // configuration against brute force on every configuration of random small nodes, its relation to
 // the object sweep and the kd (spatial) planes where its search space contains theirs, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The wide (BVH4/BVH8) and packet kernels (wide_tracer.hpp, packet_tracer.hpp) against the binary
 // reference kernel and the exact arbiter: every kernel on every built-in scene for random, primary
 // (row-major and in 8x8 / 16x16 tiles), diffuse rays, rays starting on surfaces and cut-off segments;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recursive cost evaluation (src/builders/lookahead.hpp) and what it rests on: the search spaces'
 // candidate lists (SplitFinder::find_candidates), the candidates of all search spaces
 // (SplitSearch::candidates), the pricing of a candidate's subtree, and cancellation of a build.

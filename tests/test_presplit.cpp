@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Pre-splitting passes (src/builders/presplit.hpp): early split clipping (Ernst & Greiner 2007) and the
 // edge volume heuristic (Dammertz & Keller 2008). Budget, one reference per triangle at least,
 // containment, coverage (random barycentric samples), splitting of long thin triangles, determinism

@@ -1,4 +1,5 @@
-// Ray sets and files of ../shared/spec/rays.md.
+// SPDX-License-Identifier: MIT
+// Ray sets and files of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,5 @@
-// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, BuildConfig::reinsertion_iterations,
+// SPDX-License-Identifier: MIT
+// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, ReinsertionConfig::iterations,
 // optimize): the tree SAH never rises and falls where there is something to gain, the gains are
 // priced exactly, the trees stay valid (depth cap included) and answer like the arbiter, the result
 // does not depend on the thread count, and bad options, tiny trees and cancellation are handled.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Rendering (src/trace/render.cpp): a shaded view and a heat map of a tiny hand-made scene, the
 // colour ramp, and PNG output.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Scene loading: OBJ, PLY (ascii and both binary byte orders), glTF (.gltf and .glb), the load
 // transform, cameras, the built-in scenes, the error corpus, and the shared scenes when present.
 // Binary inputs are generated into a temporary directory rather than checked in.

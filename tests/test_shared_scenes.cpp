@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: MIT
 // Every builder on the real scenes of ../shared/scenes (MANIFEST.md), against Embree with the exact
-// arbiter settling every disagreement (../shared/spec/rays.md): 20k random rays, 20k primary rays from
+// arbiter settling every disagreement (docs/rays.md): 20k random rays, 20k primary rays from
 // the MANIFEST camera (160 x 125) and the diffuse rays from those primary hits. Skipped when the
 // shared scenes are not present.
 #include <gtest/gtest.h>

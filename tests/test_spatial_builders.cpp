@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Properties specific to builders that split references (spatial splits, pre-splitting).
 #include <gtest/gtest.h>
 

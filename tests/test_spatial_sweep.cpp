@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exact sweep-plane spatial search space (src/builders/spatial_sweep_split_finder.hpp) against brute
 // force, its clipping edge cases, and the partition rule for straddlers when the budget is spent.
 #include <gtest/gtest.h>

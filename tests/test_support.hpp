@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Helpers shared by the test files: our answers as hit-file records, ready for verify_against_reference;
 // tree invariants; answers against the exact arbiter; byte-wise tree comparison and builds with a
 // given thread count.

@@ -1,7 +1,8 @@
+// SPDX-License-Identifier: MIT
 // The binary tracer (include/spacebvh/tracer.hpp): watertightness on closed meshes, axis-parallel rays
 // and rays in slab planes, the ray segment [tmin, tmax], degenerate triangles, statistics, the batch
 // API, and unusual trees (empty, a single leaf, very deep), each checked against the exact arbiter of
-// ../shared/spec/rays.md where a brute-force answer is affordable.
+// docs/rays.md where a brute-force answer is affordable.
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"

@@ -1,4 +1,5 @@
-// The exact arbiter and the agreement rule of ../shared/spec/rays.md.
+// SPDX-License-Identifier: MIT
+// The exact arbiter and the agreement rule of docs/rays.md.
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The collapse of binary trees into wide nodes (src/trace/wide_collapse.hpp): the SAH-optimal plan
 // against an exhaustive search over every way to cut small trees, against Embree's largest-area rule
 // on the built-in scenes, the plan's coverage (every triangle of the tree in some reachable leaf), and

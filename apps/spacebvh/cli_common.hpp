@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Option groups shared by the subcommands, and small helpers (timing, progress, JSON output).
 #pragma once
 

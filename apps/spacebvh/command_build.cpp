@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh build SCENE --builder NAME: build one tree and print its quality metrics.
 #include <cmath>
 #include <cstdio>

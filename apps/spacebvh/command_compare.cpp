@@ -1,8 +1,9 @@
+// SPDX-License-Identifier: MIT
 // spacebvh compare [SCENE...]: the main job. Per scene, every builder (under each --kernel) and Embree
 // (single rays and 16-ray packets) side by side on the same rays: build time, tree quality, Mrays/s
 // (median of --runs) and work per ray for random, primary and diffuse rays, each also as a ratio to
 // the first row; and every row's answers checked against Embree with disagreements settled by the
-// exact arbiter (../shared/spec/rays.md).
+// exact arbiter (docs/rays.md).
 #include <cstdio>
 #include <functional>
 #include <map>
@@ -166,8 +167,8 @@ std::string number_or_dash(std::optional<double> value, int precision) {
     return text.str();
 }
 
-// The kernel a --kernel name means for a ray kind: "auto" is the fastest measured on this machine
-// (bench/RESULTS.md): coherent packets of 8x8 tiles for primary rays, 8-wide single rays otherwise.
+// The kernel a --kernel name means for a ray kind: "auto" is the fastest on the benchmark scenes
+// (bench/): coherent packets of 8x8 tiles for primary rays, 8-wide single rays otherwise.
 std::string kernel_for(const std::string& kernel, RayKind kind) {
     if (kernel != "auto") return kernel;
     return kind == RayKind::primary ? "packet8" : "bvh8";

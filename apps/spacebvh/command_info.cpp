@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh info SCENE: what a scene holds.
 #include <cstdio>
 

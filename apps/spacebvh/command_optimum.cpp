@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh optimum [SCENE]: how far each search space's best local split is from the exhaustive
 // optimum (all 2^N partitions; src/builders/exhaustive_split.hpp) on random small nodes and on small
 // nodes sampled from a scene's cbvh tree. The slides' example: CBVH ~700 against the optimum ~100.

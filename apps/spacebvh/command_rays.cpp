@@ -1,4 +1,5 @@
-// spacebvh rays SCENE --kind random|primary|diffuse: write a ray file (../shared/spec/rays.md).
+// SPDX-License-Identifier: MIT
+// spacebvh rays SCENE --kind random|primary|diffuse: write a ray file (docs/rays.md).
 #include <cstdio>
 
 #include "cli_common.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh render SCENE -o image.png [--heatmap]: a shaded picture or a traversal-cost heat map.
 #include <cstdio>
 

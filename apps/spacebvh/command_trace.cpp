@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh trace SCENE --rays FILE --hits FILE [--occlusion]: answer a ray file with a hit file.
 #include <cstdio>
 

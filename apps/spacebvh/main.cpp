@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // spacebvh: build, inspect, trace and compare BVHs built by space subdivision.
 #include <cstdio>
 #include <exception>

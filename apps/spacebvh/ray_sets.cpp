@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "ray_sets.hpp"
 
 namespace spacebvh::cli {

@@ -1,4 +1,5 @@
-// The three ray sets of ../shared/spec/rays.md for one scene, made the same way by `rays` and `compare`.
+// SPDX-License-Identifier: MIT
+// The three ray sets of docs/rays.md for one scene, made the same way by `rays` and `compare`.
 #pragma once
 
 #include <vector>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Exact clipping of a triangle against an axis-aligned box (Sutherland-Hodgman), returning the tight
 // bounds of the clipped piece. Spatial splits (kd planes that cut references) depend on it, and so
 // does the EPO metric.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The cost model: one definition used by every builder and every report.
 //
 // Split cost (Popov et al. 2009, slide "Penalizing Overlap"):

@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: MIT
 // Basic geometry: vectors, axis-aligned boxes, rays and triangles (float32, as the ray files of
-// ../shared/spec/rays.md). Kept header-only and small: every module includes it.
+// docs/rays.md). Kept header-only and small: every module includes it.
 #pragma once
 
 #include <algorithm>

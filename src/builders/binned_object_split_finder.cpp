@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/binned_object_split_finder.hpp"
 
 #include <tbb/blocked_range.h>

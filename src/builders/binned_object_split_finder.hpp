@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Binned object SAH (Wald 2007, "On fast Construction of SAH-based Bounding Volume Hierarchies"):
 // centroids are binned into B equal bins per axis and only the B-1 cuts between bins are evaluated.
 #pragma once

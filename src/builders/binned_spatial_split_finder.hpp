@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The binned ("chopped") spatial search space of Stich, Friedrich and Dietrich 2009 ("Spatial Splits
 // in Bounding Volume Hierarchies"): B equal bins per axis over the node box; each reference is
 // clipped into every bin it spans, bins record the clipped boxes and enter/exit counts, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "spacebvh/cost_model.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Early split clipping (ESC): Ernst & Greiner, "Early Split Clipping for Bounding Volume
 // Hierarchies", IEEE/EG Symposium on Interactive Ray Tracing 2007. Bounding boxes of large
 // primitives are refined by recursive split clipping before the hierarchy is built; the refined

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The edge volume heuristic (EVH): Dammertz & Keller, "The Edge Volume Heuristic - Robust Triangle
 // Subdivision for Improved BVH Performance", IEEE/EG Symposium on Interactive Ray Tracing 2008.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/exhaustive_split.hpp"
 
 #include <bit>

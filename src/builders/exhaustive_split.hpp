@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exhaustive optimum of a small node (the slides' "Exhaustive search: O(2^N)"): every two-way
 // partition of the node's references, each child with the tight box of its references, under the one
 // cost model (CostModel::split_cost, overlap penalty included). A validator and research tool: no

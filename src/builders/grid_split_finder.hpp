@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The grid search space of Popov et al. 2009 ("Geometric Partitioning", "Practical Considerations"):
 // fix the two child boxes first, then put every reference where the SAH wants it.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/lookahead.hpp"
 
 #include <tbb/parallel_invoke.h>

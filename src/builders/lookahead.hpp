@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Recursive cost evaluation (Popov et al. 2009, slides: "use recursive cost evaluation"): choose a
 // node's split by the SAH of the subtree that each candidate leads to, built a few levels deep,
 // instead of by the split's local cost alone (the greedy choice).

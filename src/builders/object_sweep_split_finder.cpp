@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/object_sweep_split_finder.hpp"
 
 #include <immintrin.h>
@@ -46,9 +47,9 @@ void radix_sort(std::vector<KeyedReference>& items, int key_bits) {
 // integer, primitive) in 32 + B bits, B the bit width of the node's largest primitive id (fewer radix
 // passes than a fixed 64-bit key), then one gather. The primitive must be in the key: most
 // references share their centroid with another (the two triangles of a quad, coplanar triangles on an
-// axis-aligned plane; 82 % of those sorted in a crytek_sponza build). Only references equal on both
+// axis-aligned plane; most references of architectural scenes). Only references equal on both
 // (pieces of one triangle with the same centroid) are compared by CentroidOrder itself, so the order
-// is the same total order. Measured in bench/RESULTS.md ("Issue #3, session 14").
+// is the same total order.
 }  // namespace
 
 void sort_in_centroid_order(std::span<const Reference> references, int axis, std::vector<Reference>& sorted) {
@@ -124,7 +125,7 @@ SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSum
 // Offers every cut that beats the sink's threshold (CheapestSplit or SplitCandidates). Boxes are
 // swept in SSE registers (SimdBox: the same bytes and areas as AABBs), and without an overlap
 // penalty a cut is priced from the areas alone: the suffix areas come from the right-to-left pass,
-// and boxes are made only for the cuts offered to the sink. crytek_sponza cbvh: see bench/RESULTS.md.
+// and boxes are made only for the cuts offered to the sink.
 template <typename Sink>
 void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
     const std::span<const Reference> references = context.references;

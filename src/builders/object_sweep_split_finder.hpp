@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exact object-partitioning SAH sweep (the slides' CBVH; MacDonald & Booth 1990): on each axis,
 // sort the references by centroid and evaluate every cut of the sorted order.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Applying a chosen split: moving each reference of a node to its child (and, for spatial splits,
 // clipping straddling references into both).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Pre-splitting: turn a scene into references (triangle id + box) before the build, giving large or
 // badly bounded triangles several references with tighter boxes that together cover the triangle.
 // The result feeds an ordinary object-partitioning builder (the `esc` and `evh` presets: the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/reference.hpp"
 
 #include <tbb/blocked_range.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A reference: a primitive id and its current bounds. Object partitioning moves references between
 // children; spatial splits (next milestone) clip a reference's bounds and duplicate it.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/reinsertion_optimizer.hpp"
 
 #include <tbb/blocked_range.h>

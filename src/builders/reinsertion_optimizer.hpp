@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tree optimisation by subtree reinsertion, after the build (Bittner, Hapala & Havran 2013, "Fast
 // insertion-based optimization of bounding volume hierarchies"; in batches, as Meister & Bittner 2018
 // and madmann91's bvh v2 do).

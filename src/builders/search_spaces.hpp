@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The one place that turns a set of search spaces (SearchSpace bits) into split finders, for every
 // preset, the --search option and the optimum report.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A box in SSE registers (lanes x, y, z; the fourth lane unused), for the split finders' hot loops,
 // which extend boxes millions of times per build.
 #pragma once

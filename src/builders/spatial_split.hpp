@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The one implementation of reference clipping behind every spatial search space: cutting a
 // reference (a triangle restricted to its current bounds) at an axis-aligned plane.
 #pragma once
@@ -37,9 +38,8 @@ inline Split spatial_split(float cost, int axis, float position, const AABB& lef
 // at a time, down to the depth limit).
 //  * The subtree has no spare reference capacity. A plane can then duplicate nothing, so its binned
 //    price, which assumes every straddler goes to both sides, is wrong: apply_split sends them to
-//    one side. Skipping it builds faster and better trees (`spatial`, crytek_sponza: build 1.7x
-//    faster, SAH 64.23 -> 63.62; lower SAH on all six shared scenes: bench/RESULTS.md, "Spatial
-//    build time").
+//    one side. Skipping it builds faster, and the trees have a lower SAH, since the wrongly
+//    priced planes no longer win over object splits.
 //  * The gate of Stich et al. (as NVIDIA's reference builder; Embree has one too): the best split
 //    found so far has children overlapping by less than alpha * SA(root). alpha = 0: no gate.
 inline bool spatial_search_gated_off(const NodeContext& context, const CostModel& cost, float alpha) {

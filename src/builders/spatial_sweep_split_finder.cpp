@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/spatial_sweep_split_finder.hpp"
 
 #include <tbb/parallel_for.h>

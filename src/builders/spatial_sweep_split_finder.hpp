@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The exact sweep-plane spatial search space (Popov et al. 2009, slide "Implement KDBVH using sweep
 // plane"): on each axis the candidate planes are the reference bound events (every reference's min
 // and max), swept in order while the child boxes are maintained incrementally: the left box grows as

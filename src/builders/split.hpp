@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // A split configuration chosen from a search space, and the interface every search space implements.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/split_search.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // One step of the generic algorithm (Popov et al. 2009, "The Generic Algorithm") at one node: ask
 // every search space for its cheapest configuration, take the cheapest under the cost model, make a
 // leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit), and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "builders/top_down_builder.hpp"
 
 #include <tbb/parallel_for.h>
@@ -38,7 +39,7 @@ struct TopDownBuilder::Impl {
     // Centroid orders for the object sweep, kept when a search space reads them: then every node's
     // references are in CentroidOrder{x} in `references`, and the same references are in
     // CentroidOrder{y} and {z} at the same places in these two copies, so that no node sorts
-    // (crytek_sponza: bench/RESULTS.md, "Spatial build time").
+    // (two more copies of the references buy a build without a sort per node).
     bool keeps_orders = false;
     std::array<std::vector<Reference>, 2> other_orders;
     size_t input_count = 0;
@@ -248,8 +249,7 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     // Depth max_depth reaches every leaf (nodes there are leaves whatever their size). The options are
     // each search space's cheapest split: at the top of the tree the greedy step's error is in which
     // kind of split it takes (object or spatial), and the subtrees are too big to build more than a
-    // few (on coffee_maker and living_room_3, the per-axis candidates cost 2.7-2.9x the time for the
-    // same SAH to 0.1 %, bench/LOOKAHEAD_RESULTS.md).
+    // few (per-axis candidates there cost several times the build time and give the same SAH).
     const Lookahead whole_subtree_lookahead(search, limits_.max_depth, 0, options_.cancel);
     // With one search space there is no kind of split to choose between: the greedy step decides.
     const size_t top_node_references =

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The generic top-down driver (Popov et al. 2009, "The Generic Algorithm"): at each node, evaluate
 // every configured search space, take the configuration of lowest cost under the cost model, and make
 // a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit) -

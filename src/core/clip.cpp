@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Sutherland-Hodgman clipping of a triangle against axis-aligned half-spaces (Sutherland & Hodgman,
 // "Reentrant Polygon Clipping", CACM 1974), as used for spatial splits by Popov et al. 2009 and
 // Stich et al. 2009, and for the EPO metric of Aila, Karras & Laine 2013.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal: the part of a triangle inside a reference's bounds, kept as a convex polygon (double
 // precision) so that it can be cut at many axis-aligned planes without clipping the triangle again.
 // It is the one implementation of reference clipping behind include/spacebvh/clip.hpp and the

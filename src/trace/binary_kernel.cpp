@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include <immintrin.h>
 
 #include <cmath>
@@ -127,8 +128,8 @@ struct SlabRay {
 // Returns a 2-bit mask of the children whose boxes the ray enters within [tmin, tmax]; their entry
 // distances go to `entry`. With FMA each slab distance is one fused multiply-subtract whose constants
 // keep the test conservative (FusedSlabs), in place of (plane - o) * (1/d) and a widened exit: one
-// rounding step less between a node's load and the choice of the next node (random rays: Sponza
-// 1.09x, bunny 1.13x; the same boxes entered, the same answers). A NaN or infinite distance (an
+// rounding step less between a node's load and the choice of the next node (the same boxes entered,
+// the same answers). A NaN or infinite distance (an
 // axis the ray does not move along; 0 * inf where it lies in a slab plane) leaves the running bound
 // unchanged, by the min/max operand order: boxes are closed.
 inline int intersect_children(const CompactNode& node, const SlabRay& slab, __m128 tmin, __m128 tmax, float entry[2]) {
@@ -185,7 +186,7 @@ bool traverse(const BinaryLayout& layout, const Ray& ray, Hit& hit, TraversalSta
         // The walk is bound by memory latency: start fetching both children (node or leaf triangles)
         // now, so the fetch overlaps this node's box tests. Two lines each: an inner child's first
         // inner child is laid out right after it, so the second line saves a wait one level further
-        // down (Sponza random rays 1.04-1.08x; a third line was slower), and for a leaf they hold most
+        // down (a third line costs more than it saves), and for a leaf they hold most
         // of its first pack.
         for (int slot = 0; slot < 2; ++slot) {
             const char* child = at(node.child[slot]);
@@ -199,8 +200,8 @@ bool traverse(const BinaryLayout& layout, const Ray& ray, Hit& hit, TraversalSta
         // Entered leaves are tested at once, in slot order; then the entered inner children decide
         // where to go next. Every such choice is a branch, never a select: a predicted branch lets
         // the next node's fetch start while this node's box test is still in flight, where a select
-        // (or an index computed from the mask) makes that address wait for the test. The selects
-        // this replaced cost 1.3-1.5x on Sponza's primary rays and 1.1-1.2x on occlusion rays.
+        // (or an index computed from the mask) makes that address wait for the test, which costs far
+        // more than the occasional misprediction.
         const unsigned leaves = (node.lanes(0) != 0 ? 1u : 0u) | (node.lanes(1) != 0 ? 2u : 0u);
         const unsigned entered_leaves = unsigned(mask) & leaves;
         if (entered_leaves) [[unlikely]] {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // An allocator that backs large arrays with 2 MiB pages where the kernel allows it (transparent huge
 // pages in "madvise" mode, the Debian default). Traversal touches nodes and triangles all over a
 // tree of tens of MiB; with 4 KiB pages nearly every fetch also misses the TLB. Embree does the same.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Included after wide_kernel.inl and packet_kernel.inl; see kernel_instances.cpp.
 
 // The entry points of both kernels, which kernel_instances.cpp puts in its tables.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Every kernel, compiled once per instruction set: wide_kernel.inl (single rays) and
 // packet_kernel.inl (packets) are included into one namespace per node-test policy, under
 // `#pragma GCC target` for AVX2 and AVX-512, so a portable build still runs the widest instructions

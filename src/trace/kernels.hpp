@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The compiled kernels (kernel_instances.cpp): one copy per instruction set, looked up at run time.
 // A Tracer holds the table of the kernel and node test it was asked for.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Coherent packets (e.g. the primary rays of an 8x8 image tile) traced together through a wide BVH,
 // after Wald, Boulos and Shirley, "Ray Tracing Deformable Scenes Using Dynamic Bounding Volume
 // Hierarchies" (TOG 2007), the traversal the paper's "frustum" figures measure:

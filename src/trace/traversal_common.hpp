@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // What every traversal kernel shares: the conservative box-test constants, the floating-point mode the
 // kernels run in, and the parallel loop over a batch of rays.
 #pragma once
@@ -22,9 +23,9 @@ inline constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0
 // The per-ray, per-axis constants of the fused slab test of the BVH4/BVH8 single-ray kernels
 // (Embree's form) and of the binary kernel's two-box test: a slab distance is one fused
 // multiply-subtract, plane * scale - offset, instead of (plane - o) * (1/d) in two dependent steps,
-// and exit distances need no widening after. (An early binary kernel, which chose the next node by
-// selects, measured slower with it: bunny primary rays 9.2 -> 7.2 Mrays/s; the branching kernel
-// gains 1.09-1.13x on random rays.)
+// and exit distances need no widening after. The binary kernel gains from it too, because it picks
+// the next node by a branch: a kernel that chose the next node by selects would wait on the whole
+// test and lose more than the fused test saves.
 //
 // Why no box a ray enters within [tmin, tmax] is culled (u = 2^-24; t = (p - o) / d exact; t >= 0, as
 // the spec's rays have tmin >= 0).
@@ -47,9 +48,8 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
     unsigned negative;  // bit k: the direction is negative along axis k (the ray enters through the upper plane)
 
     // Made in a few vector instructions for the three axes at once: every ray pays for them, and many
-    // of the binary kernel's primary and occlusion rays visit only a dozen nodes (living_room_3,
-    // primary occlusion against the subtract-multiply kernel: 0.96-0.97x with constants made one
-    // axis at a time, 0.99-1.01x with these).
+    // of the binary kernel's primary and occlusion rays visit only a dozen nodes, where constants made
+    // one axis at a time would cost more than the fused test saves.
     explicit FusedSlabs(const Ray& ray) {
         const __m128 org = _mm_setr_ps(ray.org[0], ray.org[1], ray.org[2], 0.0f);
         const __m128 dir = _mm_setr_ps(ray.dir[0], ray.dir[1], ray.dir[2], 1.0f);

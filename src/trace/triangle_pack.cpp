@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "trace/triangle_pack.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Leaf triangles in SoA packs of four, and the four-wide watertight test on them: the leaf layout and
 // leaf test of every kernel (binary, BVH4, BVH8, packets), so one copy of the exact test exists.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The closest-hit order in which the single-ray wide kernels visit three or more children a ray
 // enters, as integer keys that sort without branches. It is visits_after's order (wide_kernel.inl,
 // which orders two children by comparing the floats), except that visits_after ties -0 with +0.

@@ -1,7 +1,8 @@
+// SPDX-License-Identifier: MIT
 // Watertight ray-triangle intersection (Woop, Benthin, Wald, "Watertight Ray/Triangle
 // Intersection", JCGT 2013), in float, with a forward error bound: when an edge function is too close
 // to zero for its sign to be trusted, the exact double-precision test of verify.hpp decides. The
-// answers therefore equal the exact arbiter of ../shared/spec/rays.md, not merely watertight ones.
+// answers therefore equal the exact arbiter of docs/rays.md, not merely watertight ones.
 #pragma once
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "trace/wide_collapse.hpp"
 
 #include <algorithm>

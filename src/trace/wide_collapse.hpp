@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Which binary nodes become the children of each wide node when a binary Bvh is collapsed into a
 // W-wide layout (wide_layout.hpp). Two strategies:
 //  - largest area (Embree's): from a node's two children, open the inner child of largest surface

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The single-ray kernels of wide BVHs, written once over a node-test policy `S`. kernel_instances.cpp
 // includes this file once per instruction set, inside a namespace that defines the policies and under
 // `#pragma GCC target`, so each copy is compiled for its instructions and chosen at run time.
@@ -84,10 +85,9 @@ template <class S, bool kAnyHit, bool kStats>
 // is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
 // hit: leaves first (a hit there ends the ray at once), then the inner children farthest first.
 // Nearest first is the worst order for occlusion: diffuse rays start on a surface, whose
-// neighbourhood they must cross but which rarely occludes them. Sponza, BVH8, boxes tested per
-// occlusion ray (binned / spatial tree): diffuse 35.2 / 63.0 in slot order, 43.0 / 87.0 nearest
-// first, 27.1 / 30.0 farthest first; random and primary 26.5 and 30.8 (binned, slot order) -> 21.2
-// and 27.6.
+// neighbourhood they must cross but which rarely occludes them. Farthest first tests fewer boxes
+// per occlusion ray than slot order for every ray kind, and far fewer than nearest first for
+// diffuse rays.
 template <bool kAnyHit, int W>
 [[gnu::always_inline]] inline bool visits_after(const WideNode<W>& node, float entry_a, uint32_t slot_a, float entry_b,
                                                  uint32_t slot_b) {
@@ -125,14 +125,13 @@ template <class S, bool kAnyHit, bool kStats>
 bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     const RayBoxes<S> boxes(ray);
-    // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and loaded
-    // them from memory at every node (closest hits, bvh8, 1 thread: bunny random 1.05x, Sponza
-    // random 1.03x and diffuse 1.04x; occlusion unchanged).
+    // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and would
+    // load them from memory at every node of a closest-hit walk.
     const WideNode<W>* const nodes = layout.nodes.data();
     const TrianglePack* const packs = layout.packs.data();
     const float tmin = ray.tmin;
     // The triangle test's per-ray constants (three divisions) are made when the ray reaches its first
-    // leaf: many rays never do (bunny, random rays: 1.08-1.11x from this alone).
+    // leaf: many rays (random rays around a small object) never do.
     WatertightRay shear;
     PackRay pack_ray;
     bool sheared = false;
@@ -167,8 +166,8 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                     // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a
                     // surface whose neighbourhood it must cross but which rarely occludes it, so the
                     // far child is the likelier occluder; and sorting them all costs more than it
-                    // saves. Embree pushes unsorted; sorting all (leaf children first, then farthest
-                    // first, as the packets do) measured slower.
+                    // saves. Embree pushes unsorted too; sorting all of them (leaf children first,
+                    // then farthest first, as the packets do) is slower.
                     uint32_t farthest = uint32_t(__builtin_ctz(mask));
                     for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
                         const uint32_t lane = uint32_t(__builtin_ctz(rest));
@@ -202,9 +201,9 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                     current = {node.child[next], node.count[next], entry[next]};
                 } else {
                     // Three or more: sort their visit keys (visit_order.hpp: visits_after's order as
-                    // integers), then push all but the first to visit, the last to visit deepest. The
-                    // insertion sort of 12-byte stack entries it replaced was 11 % of the closest-hit
-                    // kernel's instructions (callgrind, AVX2 BVH8, rotated Sponza).
+                    // integers), then push all but the first to visit, the last to visit deepest. 8-byte integer
+                    // keys sort in a few min/max steps, far fewer instructions than an insertion sort
+                    // of 12-byte stack entries.
                     uint64_t key[W];
                     int n = 0;
                     key[n++] = visit_key(entry[first], first);

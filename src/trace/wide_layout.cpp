@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 #include "trace/wide_layout.hpp"
 
 #include <algorithm>
@@ -28,11 +29,8 @@ WideNode<W> empty_node() {
 // empty slots go last). The any-hit kernels follow the farthest entered child and pop the others
 // from the stack in reverse slot order (wide_kernel.inl), so of those the smallest subtree, the
 // cheapest to search for an occluder, comes first; Embree orders its children by size for shadow
-// rays too. Child boxes tested per occlusion ray (BVH8), against the collapse's own order: Sponza
-// diffuse (cbvh+opt, leaf blocks of 4) 17.25 -> 16.85, rotated Sponza diffuse / random
-// (spatial+opt) 30.52 -> 29.68 / 20.64 -> 20.29, sibenik random 27.09 -> 26.99; Mrays/s (1 thread,
-// medians of 7 alternated runs) 1.037x, 1.020x / 1.013x, 1.013x. Mostly free rays (bunny) and
-// closest hits do the same work; closest hits only see slot order when distances tie.
+// rays too. Occlusion rays test fewer child boxes than in the collapse's own order; mostly free rays
+// and closest hits do the same work (closest hits only see slot order when distances tie).
 template <int W>
 void order_slots_by_size(WideNode<W>& node, const uint64_t (&lanes)[W]) {
     int order[W];

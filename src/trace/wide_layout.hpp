@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The memory layout of wide BVHs (wide_tracer.hpp) and the collapse of a binary Bvh into it.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Embree 3 as the yardstick: the same scene, the same rays, Embree's own BVHs and kernels.
 // See ../shared/research/embree-measured.md for how the reference figures were taken; this adapter
 // reproduces that setup (rtcIntersect1 / rtcOccluded1, oneTBB chunks of 1024 rays).
@@ -37,7 +38,7 @@ void check_embree(RTCDevice device, const char* what);
 // time of rtcCommitScene alone, as in embree-measured.md ("embree build ms"). For a median of several
 // builds, construct several times.
 //
-// Queries are const and thread-safe. Rays follow ../shared/spec/rays.md: t in [tmin, tmax] in units
+// Queries are const and thread-safe. Rays follow docs/rays.md: t in [tmin, tmax] in units
 // of |dir| (Embree's tnear/tfar), so Hit::t is directly comparable with ours.
 class EmbreeScene {
 public:

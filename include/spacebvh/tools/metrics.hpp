@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Quality metrics of a tree: structure, memory, tree SAH and EPO (Aila, Karras, Laine 2013).
 #pragma once
 

@@ -1,4 +1,5 @@
-// Ray sets and result files exactly as ../shared/spec/rays.md, so that outside tools can check our
+// SPDX-License-Identifier: MIT
+// Ray sets and result files exactly as docs/rays.md, so that outside tools can check our
 // answers ray by ray. The generators are compiled with -ffp-contract=off (no fused multiply-add) to
 // reproduce the spec's rays bit for bit.
 #pragma once

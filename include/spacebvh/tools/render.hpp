@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: MIT
 // Pictures of a scene through a tracer: a shaded view (to see what is traced) and a cost heat map
-// (to see where the tree makes rays work), both with the primary rays of ../shared/spec/rays.md.
+// (to see where the tree makes rays work), both with the primary rays of docs/rays.md.
 #pragma once
 
 #include <array>

@@ -1,4 +1,5 @@
-// Checking answers ray by ray, as ../shared/spec/rays.md defines it: agreement of two hit records,
+// SPDX-License-Identifier: MIT
+// Checking answers ray by ray, as docs/rays.md defines it: agreement of two hit records,
 // and the exact double-precision arbiter that settles disagreements.
 #pragma once
 

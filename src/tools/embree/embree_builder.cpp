@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Embree's binary trees imported into our Bvh (see embree_builder.hpp).
 #include "spacebvh/tools/embree_builder.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Embree 3 adapter (see embree_scene.hpp).
 #include "spacebvh/tools/embree_scene.hpp"
 

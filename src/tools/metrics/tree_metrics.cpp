@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Tree quality metrics: structure, memory, tree SAH and End-Point Overlap (EPO).
 //
 // SAH (Aila, Karras & Laine 2013, Eq. 1; the cost model header):

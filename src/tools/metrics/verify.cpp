@@ -1,4 +1,5 @@
-// Ray-by-ray checking of ../shared/spec/rays.md ("Files": agreement rule and arbiter).
+// SPDX-License-Identifier: MIT
+// Ray-by-ray checking of docs/rays.md ("Agreement and the arbiter").
 #include "spacebvh/tools/verify.hpp"
 
 #include <algorithm>

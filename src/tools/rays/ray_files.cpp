@@ -1,4 +1,5 @@
-// Ray and hit files of ../shared/spec/rays.md ("Files"): 8 bytes magic, uint64 count, then fixed-size
+// SPDX-License-Identifier: MIT
+// Ray and hit files of docs/rays.md ("Ray file", "Hit file"): 8 bytes magic, uint64 count, then fixed-size
 // little-endian records. Values are encoded byte by byte so the files are the same on any host.
 #include <algorithm>
 #include <bit>

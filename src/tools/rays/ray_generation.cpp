@@ -1,4 +1,5 @@
-// Ray sets of ../shared/spec/rays.md ("Random numbers", "Kinds"), reproduced bit for bit.
+// SPDX-License-Identifier: MIT
+// Ray sets of docs/rays.md ("Random numbers", "Ray kinds"), reproduced bit for bit.
 //
 // This file is compiled with -ffp-contract=off (see CMakeLists.txt): no fused multiply-add, so every
 // product and sum below is rounded to float32 exactly as the spec writes it, left to right. The

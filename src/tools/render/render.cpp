@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Shaded views and traversal-cost heat maps (see spacebvh/render.hpp), and PNG output through
 // stb_image_write.
 #include "spacebvh/tools/render.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Procedural scenes, generated without files and deterministic (no std distributions, no clocks):
 //   interior          an architectural hall: floor, walls and gabled roof split into long thin strips,
 //                     columns, arches and slanted roof beams (the case where object partitioning does badly)
@@ -14,7 +15,7 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 const SceneTransform kInteriorRotation{Vec3(45.0f, 45.0f, 45.0f), 1.0f, Vec3(0.0f)};
 
-// splitmix64 (Steele, Lea & Flood 2014), as in ../shared/spec/rays.md.
+// splitmix64 (Steele, Lea & Flood 2014), as in docs/rays.md.
 struct SplitMix64 {
     uint64_t state;
     uint64_t next() {

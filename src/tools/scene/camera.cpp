@@ -1,4 +1,5 @@
-// Cameras: parsing, the default camera of ../shared/spec/rays.md and the MANIFEST camera table.
+// SPDX-License-Identifier: MIT
+// Cameras: parsing, the default camera of docs/rays.md and the MANIFEST camera table.
 #include <filesystem>
 #include <fstream>
 

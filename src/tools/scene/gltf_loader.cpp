@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // glTF 2.0 reader (.gltf and .glb) on top of tinygltf (header-only, Debian libtinygltf-dev 2.7).
 // Triangles of every mesh instance in the default scene (or of all scenes when there is no default),
 // in node order (depth first, children in listed order) and primitive order, with node transforms

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Wavefront OBJ reader: `v` and `f` records only (everything else is ignored), polygons fan-triangulated
 // (v0, vi, vi+1) in file order across all objects and groups.
 // Hand-written rather than tinyobjloader: tinyobjloader 2.0rc10 parses malformed numbers as 0 and

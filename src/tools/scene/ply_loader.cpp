@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // PLY reader (Turk 1994; format as documented by Paul Bourke, "PLY - Polygon File Format"):
 // ascii, binary_little_endian and binary_big_endian. Uses vertex x/y/z and the face list
 // `vertex_indices` (or `vertex_index`); every other element and property is read and skipped.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // load_scene: picks the reader by extension (or builtin:NAME), applies the load transform, counts
 // degenerate triangles and names the scene.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // Internal pieces shared by the scene loaders (not installed): file reading, error formatting,
 // number parsing and the load-time transform as a precomputed matrix.
 #pragma once
@@ -63,7 +64,7 @@ inline const char* describe(NumberStatus status) {
 
 // Stores through a volatile so the value is rounded to float32 here: GCC contracts a*b+c into a fused
 // multiply-add by default (-ffp-contract=fast) when -march=native enables FMA, which changes the last
-// bit of results that ../shared/spec/rays.md requires to be computed unfused.
+// bit of results that docs/rays.md requires to be computed unfused.
 inline float unfused(float value) {
     volatile float stored = value;
     return stored;

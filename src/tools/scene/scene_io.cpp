@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // File reading and error formatting shared by the loaders.
 #include <cerrno>
 #include <cstdio>

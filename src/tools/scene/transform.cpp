@@ -1,4 +1,5 @@
-// The load-time transform (../shared/spec/rays.md, "Scene conventions"): R = Rz(c) * Ry(b) * Rx(a),
+// SPDX-License-Identifier: MIT
+// The load-time transform (docs/rays.md, "Scene conventions"): R = Rz(c) * Ry(b) * Rx(a),
 // degrees, about the origin; then scale; then translate.
 #include <cctype>
 #include <cmath>
