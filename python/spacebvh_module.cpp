@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: MIT
 // The Python module `spacebvh`: scenes from files or numpy arrays, the named builders, tree metrics,
 // and the tracers on numpy ray arrays. A thin layer over the C++ API: every check and every answer
 // is the library's (errors become spacebvh.Error, a RuntimeError, with the library's message).
@@ -288,7 +289,7 @@ py::tuple rays_as_arrays(const std::vector<Ray>& rays, bool with_range = false) 
     return with_range ? py::make_tuple(origins, directions, tmin, tmax) : py::make_tuple(origins, directions);
 }
 
-// Hit records (../shared/spec/rays.md) from t and primitive arrays (-1 = a miss, t = inf).
+// Hit records (docs/rays.md) from t and primitive arrays (-1 = a miss, t = inf).
 std::vector<HitRecord> make_hit_records(const FloatArray& t, const IndexArray& primitive) {
     if (t.ndim() != 1 || primitive.ndim() != 1 || t.shape(0) != primitive.shape(0))
         throw Error("t and primitive must be arrays of one length");
@@ -472,14 +473,14 @@ PYBIND11_MODULE(spacebvh, m) {
         "random_rays",
         [](const Scene& scene, size_t count, uint64_t seed) { return rays_as_arrays(generate_random_rays(scene.bounds(), count, seed)); },
         py::arg("scene"), py::arg("count"), py::arg("seed") = 1,
-        "The random rays of ../shared/spec/rays.md: (origins, directions) arrays.");
+        "The random rays of docs/rays.md: (origins, directions) arrays.");
     m.def(
         "primary_rays",
         [](const Scene& scene, uint32_t width, uint32_t height, const std::string& camera) {
             return rays_as_arrays(generate_primary_rays(camera.empty() ? default_camera(scene) : Camera::parse(camera), width, height));
         },
         py::arg("scene"), py::arg("width") = 1024u, py::arg("height") = 1024u, py::arg("camera") = "",
-        "The primary rays of ../shared/spec/rays.md, row by row from the top: (origins, directions) arrays. camera: "
+        "The primary rays of docs/rays.md, row by row from the top: (origins, directions) arrays. camera: "
         "'ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy' (the MANIFEST's values), default the spec's camera for the scene.");
     m.def(
         "diffuse_rays",
@@ -502,21 +503,21 @@ PYBIND11_MODULE(spacebvh, m) {
         },
         py::arg("scene"), py::arg("origins"), py::arg("directions"), py::arg("t"), py::arg("primitive"),
         py::arg("seed") = 1, py::arg("epsilon") = 0.0f,
-        "The diffuse rays of ../shared/spec/rays.md: one cosine-distributed bounce per primary ray that hits (t, "
+        "The diffuse rays of docs/rays.md: one cosine-distributed bounce per primary ray that hits (t, "
         "primitive: intersect()'s answers for those rays, primitive -1 = a miss), in primary order, leaving the "
         "surface at epsilon along its normal (0: the spec's default). Returns (origins, directions) arrays.");
     m.def(
         "read_rays", [](const std::string& path) { return rays_as_arrays(read_ray_file(path), true); }, py::arg("path"),
-        "A ray file of ../shared/spec/rays.md: (origins, directions, tmin, tmax) arrays.");
+        "A ray file of docs/rays.md: (origins, directions, tmin, tmax) arrays.");
     m.def(
         "write_rays",
         [](const std::string& path, const FloatArray& origins, const FloatArray& directions, const py::object& tmin,
            const py::object& tmax) { write_ray_file(path, make_rays(origins, directions, tmin, tmax)); },
         py::arg("path"), py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0f, py::arg("tmax") = kInfinity,
-        "Writes a ray file of ../shared/spec/rays.md (tmin, tmax: numbers or one per ray).");
+        "Writes a ray file of docs/rays.md (tmin, tmax: numbers or one per ray).");
     m.def(
         "read_hits", [](const std::string& path) { return hit_records_as_arrays(read_hit_file(path)); }, py::arg("path"),
-        "A hit file of ../shared/spec/rays.md: (t, primitive) arrays, primitive -1 for a miss (occlusion files: t = 0 "
+        "A hit file of docs/rays.md: (t, primitive) arrays, primitive -1 for a miss (occlusion files: t = 0 "
         "occluded, inf free).");
     m.def(
         "write_hits",
@@ -524,5 +525,5 @@ PYBIND11_MODULE(spacebvh, m) {
             write_hit_file(path, make_hit_records(t, primitive));
         },
         py::arg("path"), py::arg("t"), py::arg("primitive"),
-        "Writes a hit file of ../shared/spec/rays.md from t and primitive arrays (-1 = a miss), e.g. intersect()'s.");
+        "Writes a hit file of docs/rays.md from t and primitive arrays (-1 = a miss), e.g. intersect()'s.");
 }

@@ -1,5 +1,6 @@
+// SPDX-License-Identifier: MIT
 // Scenes: a flat list of triangles numbered in file order (polygons fan-triangulated), loaded from
-// OBJ, PLY or glTF 2.0, or generated (`builtin:NAME`). See ../shared/spec/rays.md for the numbering.
+// OBJ, PLY or glTF 2.0, or generated (`builtin:NAME`). docs/rays.md gives the numbering.
 #pragma once
 
 #include <cstddef>
@@ -68,11 +69,11 @@ Scene make_indexed_scene(std::span<const float> vertices, std::span<const int64_
 std::vector<std::string> builtin_scene_names();
 Scene make_builtin_scene(const std::string& name);
 
-// The default camera of ../shared/spec/rays.md for a scene: eye = center + normalize(1, 0.6, 1) *
+// The default camera of docs/rays.md for a scene: eye = center + normalize(1, 0.6, 1) *
 // (1.5 * |diagonal|), looking at the center, up = +y, fovy = 45.
 Camera default_camera(const Scene& scene);
 
-// The camera listed for a shared scene in ../shared/scenes/MANIFEST.md (matched by the scene file's
+// The camera listed for the scene in a MANIFEST.md of the scene collection it comes from (matched by the scene file's
 // stem), transformed with the scene's load transform; falls back to default_camera otherwise.
 Camera camera_for_scene(const Scene& scene, const std::string& source, const SceneTransform& transform);
 
