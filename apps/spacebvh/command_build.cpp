@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: MIT
-// spacebvh build SCENE --builder NAME: build one tree and print its quality metrics.
+// spacebvh build SCENE --builder NAME [--save FILE]: build one tree, print its quality metrics, and
+// optionally save it as a tree file.
 #include <cmath>
 #include <cstdio>
 
 #include "cli_common.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
+#include "spacebvh/tree_file.hpp"
+#include "tree_option.hpp"
 
 namespace spacebvh::cli {
 
@@ -18,6 +21,7 @@ void add_build_command(CLI::App& app) {
         BuildCliOptions build;
         CommonOptions common;
         bool no_epo = false;
+        std::string save_path;
     };
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand("build", "build a BVH and print nodes, depth, references, bytes, SAH and EPO");
@@ -26,6 +30,8 @@ void add_build_command(CLI::App& app) {
     options->build.add_to(*command);
     options->common.add_to(*command);
     command->add_flag("--no-epo", options->no_epo, "skip the EPO metric (the slow one)");
+    command->add_option("--save", options->save_path,
+                        "save the tree to this file (docs/tree-format.md), for --tree of trace, render and compare");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         const Scene scene = load_scene(options->source, options->scene.transform());
@@ -51,6 +57,10 @@ void add_build_command(CLI::App& app) {
         std::printf("bytes            %zu tree, %zu traversal layout\n", stats.bytes, tracer.memory_bytes());
         std::printf("SAH              %.4f  (%s)\n", stats.sah, build_options.cost.describe().c_str());
         if (!options->no_epo) std::printf("EPO              %.4f\n", stats.epo);
+        if (!options->save_path.empty()) {
+            save_bvh(options->save_path, bvh, scene.triangles, build_settings_text(build_options));
+            std::printf("saved            %s\n", options->save_path.c_str());
+        }
         const size_t peak_rss = peak_rss_bytes();
         std::printf("peak memory      %.1f MiB (resident, whole process)\n", double(peak_rss) / (1024.0 * 1024.0));
 
@@ -78,6 +88,7 @@ void add_build_command(CLI::App& app) {
                                {"layout_bytes", tracer.memory_bytes()},
                                {"sah", stats.sah}};
         if (!options->no_epo) json["epo"] = stats.epo;
+        if (!options->save_path.empty()) json["saved"] = options->save_path;
         write_json(options->common.json_path, json);
     });
 }

@@ -16,6 +16,7 @@
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
 #include "spacebvh/tools/verify.hpp"
+#include "tree_option.hpp"
 
 namespace spacebvh::cli {
 
@@ -118,6 +119,7 @@ std::string ratio_text(double value, double reference, int precision) {
 struct BuilderSpec {
     std::string label;
     TreeRecipe options;
+    bool saved_tree = false;  // --tree: loaded, not built (options unused)
 };
 
 BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& defaults) {
@@ -208,6 +210,7 @@ void add_compare_command(CLI::App& app) {
         BuildCliOptions build;
         CameraOptions camera;
         CommonOptions common;
+        TreeOption tree;
     };
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand(
@@ -235,8 +238,12 @@ void add_compare_command(CLI::App& app) {
     options->build.add_to(*command, false);
     options->camera.add_to(*command);
     options->common.add_to(*command);
+    options->tree.add_to(*command,
+                         "a saved tree (build --save) of the one scene given: its rows (one per --kernel, build ms = "
+                         "load ms) replace the builder rows and are the ratio baseline; rows of --builders, when "
+                         "given explicitly, follow");
 
-    command->callback([options] {
+    command->callback([options, command] {
         const auto limit = options->common.thread_limit();
         const InterruptScope interrupts;  // Ctrl-C stops between measurements (and inside our builds)
         if (options->runs < 1 || options->runs > 1000) throw Error("--runs must be in [1, 1000]");
@@ -246,6 +253,11 @@ void add_compare_command(CLI::App& app) {
         std::vector<BuilderSpec> builders;
         for (const auto& name : CLI::detail::split(options->builders, ','))
             if (!name.empty()) builders.push_back(parse_builder_spec(name, options->build));  // validates each
+        if (options->tree.given()) {
+            if (command->count("--builders") == 0) builders.clear();
+            builders.insert(builders.begin(), BuilderSpec{options->tree.path, options->build.options("binned"), true});
+            if (options->sources.size() != 1) throw Error("--tree: name the one scene the tree was built over");
+        }
         if (builders.empty()) throw Error("--builders names no builder");
         std::vector<std::string> kernels;
         for (const auto& name : CLI::detail::split(options->kernels, ','))
@@ -306,10 +318,12 @@ void add_compare_command(CLI::App& app) {
                 Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
                     const auto start = std::chrono::steady_clock::now();
-                    bvh = build_tree(scene, build_options);
+                    bvh = builders[b].saved_tree ? tree_for(options->tree, scene, build_options) : build_tree(scene, build_options);
                     build_ms.push_back(milliseconds_since(start));
                 }
-                const TreeStats tree_stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
+                if (builders[b].saved_tree) builders[b].label = options->tree.path + ": " + bvh.builder;
+                const CostModel& tree_cost = builders[b].saved_tree ? bvh.cost : build_options.cost;
+                const TreeStats tree_stats = compute_tree_stats(scene, bvh, tree_cost, !options->no_epo);
                 if (b == 0) {
                     const Tracer tracer(scene, bvh, Kernel::binary);
                     for (RayKind kind : kKinds) ray_sets[int(kind)] = make_ray_set(kind, scene, tracer, parameters);
@@ -318,8 +332,8 @@ void add_compare_command(CLI::App& app) {
                 }
                 for (size_t k = 0; k < kernels.size(); ++k) {
                     Row& row = rows.emplace_back();
-                    row.name = builders[b].label + " (C_o=" + number_or_dash(build_options.cost.overlap_penalty, 2) + ")";
-                    row.cost = build_options.cost;
+                    row.name = builders[b].label + " (C_o=" + number_or_dash(tree_cost.overlap_penalty, 2) + ")";
+                    row.cost = tree_cost;
                     row.build_ms = median(build_ms);
                     row.stats = tree_stats;
                     std::map<std::string, const Tracer*> by_kernel;  // shared between kinds

@@ -5,6 +5,7 @@
 #include "cli_common.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/render.hpp"
+#include "tree_option.hpp"
 
 namespace spacebvh::cli {
 
@@ -20,6 +21,7 @@ void add_render_command(CLI::App& app) {
         BuildCliOptions build;
         CameraOptions camera;
         CommonOptions common;
+        TreeOption tree;
     };
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand("render", "render a shaded image or a heat map of traversal cost per pixel");
@@ -36,13 +38,14 @@ void add_render_command(CLI::App& app) {
     options->build.add_to(*command);
     options->camera.add_to(*command);
     options->common.add_to(*command);
+    options->tree.add_to(*command, "render with this saved tree (build --save) instead of building one");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         const SceneTransform transform = options->scene.transform();
         const Scene scene = load_scene(options->source, transform);
         const Camera camera = options->camera.camera_for(scene, options->source, transform);
         const TreeRecipe build_options = options->build.options(options->build.builder);
-        const Bvh bvh = build_tree(scene, build_options);
+        const Bvh bvh = tree_for(options->tree, scene, build_options);
         const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
         const Tracer& tracer = *tracer_pointer;
         const uint32_t width = options->camera.width, height = options->camera.height;
@@ -60,7 +63,7 @@ void add_render_command(CLI::App& app) {
         std::printf("wrote %s (%ux%u heat map of %s, builder %s, %s): mean %.1f, max %llu, colour scale top %.1f; "
                     "per ray %.2f nodes, %.2f triangles\n",
                     options->output.c_str(), width, height, options->quantity.c_str(), bvh.builder.c_str(),
-                    build_options.cost.describe().c_str(), info.mean_value, (unsigned long long)info.max_value,
+                    (options->tree.given() ? bvh.cost : build_options.cost).describe().c_str(), info.mean_value, (unsigned long long)info.max_value,
                     info.scale_max, double(info.totals.nodes_visited) / pixels,
                     double(info.totals.triangles_tested) / pixels);
         write_json(options->common.json_path, {{"output", options->output},

@@ -6,6 +6,7 @@
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/trace.hpp"
+#include "tree_option.hpp"
 
 namespace spacebvh::cli {
 
@@ -18,6 +19,7 @@ void add_trace_command(CLI::App& app) {
         SceneOptions scene;
         BuildCliOptions build;
         CommonOptions common;
+        TreeOption tree;
     };
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand("trace", "trace a ray file and write a hit file (closest hit or occlusion)");
@@ -30,12 +32,15 @@ void add_trace_command(CLI::App& app) {
     options->scene.add_to(*command);
     options->build.add_to(*command);
     options->common.add_to(*command);
+    options->tree.add_to(*command, "trace this saved tree (build --save) instead of building one");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         const Scene scene = load_scene(options->source, options->scene.transform());
         const std::vector<Ray> rays = read_ray_file(options->rays_path);
         const TreeRecipe build_options = options->build.options(options->build.builder);
-        const Bvh bvh = build_tree(scene, build_options);
+        double tree_ms = 0;
+        const Bvh bvh = tree_for(options->tree, scene, build_options, &tree_ms);
+        const CostModel& cost = options->tree.given() ? bvh.cost : build_options.cost;
         const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
         const Tracer& tracer = *tracer_pointer;
         TraversalStats stats;
@@ -57,8 +62,10 @@ void add_trace_command(CLI::App& app) {
         write_hit_file(options->hits_path, records);
         std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s), kernel %s\n", rays.size(), hit_count,
                     options->occlusion ? "occluded" : "hits", trace_ms, double(rays.size()) / trace_ms / 1000.0,
-                    options->common.effective_threads(), bvh.builder.c_str(), build_options.cost.describe().c_str(), tracer.name().c_str());
+                    options->common.effective_threads(), bvh.builder.c_str(), cost.describe().c_str(), tracer.name().c_str());
+        if (options->tree.given()) std::printf("tree loaded from %s in %.1f ms\n", options->tree.path.c_str(), tree_ms);
         nlohmann::json json = {{"rays", rays.size()}, {"hits", hit_count}, {"trace_ms", trace_ms}, {"builder", bvh.builder}, {"kernel", tracer.name()}};
+        json[options->tree.given() ? "tree_load_ms" : "build_ms"] = tree_ms;
         if (options->stats && !rays.empty()) {
             const double n = double(rays.size());
             std::printf("per ray: %.2f nodes visited, %.2f triangles tested\n", double(stats.nodes_visited) / n,

@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: MIT
+// Tree files on the command line: `build --save FILE` writes the built tree, `--tree FILE` on trace,
+// render and compare uses a saved tree in place of building one (include/spacebvh/tree_file.hpp).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "cli_common.hpp"
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/tools/scene.hpp"
+
+namespace spacebvh::cli {
+
+using namespace spacebvh::tools;
+
+struct TreeOption {
+    std::string path;
+
+    // Adds --tree to the command, exclusive with --builder where the command has one (the file
+    // names the tree's builder). `help` says what the command does with the tree.
+    void add_to(CLI::App& command, const std::string& help);
+    bool given() const { return !path.empty(); }
+};
+
+// The tree a command uses: loaded from --tree when given (validated against the scene's triangles:
+// another scene or transform is an error), else built with `options`. `milliseconds` gets the load
+// or build time.
+Bvh tree_for(const TreeOption& tree, const Scene& scene, const TreeRecipe& options, double* milliseconds = nullptr);
+
+// The build flags as text stored in a saved tree file (informative: loading does not read them).
+std::string build_settings_text(const TreeRecipe& options);
+
+}  // namespace spacebvh::cli
