@@ -11,6 +11,7 @@ packages=(
   libcli11-dev          # command line
   nlohmann-json3-dev    # --json output
   libgtest-dev          # tests
+  libgmp-dev            # exact rational reference in the query tests
   python3-dev pybind11-dev python3-numpy  # the Python module (python/) and its test
 )
 missing=()
