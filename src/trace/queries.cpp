@@ -271,7 +271,11 @@ constexpr double kWiden = 1e-15;
 // Which of the node's two children the ray enters within [tmin, tmax] (bit i: child i), and their entry
 // distances.
 inline unsigned enter_children(const QueryNode& node, const SlabRay& s, double tmin, double tmax, double near_out[2]) {
-    Double4 near = {tmin, tmin, tmin, tmin}, far = {tmax, tmax, tmax, tmax};
+    // Clamped to +-2^400: a crossing inside a box lies within the box's slab on an axis the ray moves
+    // along, so |t| <= 2^129 / 2^-149 there; a parallel axis whose slab misses the origin gives
+    // distances beyond 2^450 and is culled even when tmax is infinite.
+    const double low = std::max(tmin, -0x1p400), high = std::min(tmax, 0x1p400);
+    Double4 near = {low, low, low, low}, far = {high, high, high, high};
     for (int a = 0; a < 3; ++a) {
         Float4 pf;
         std::memcpy(&pf, node.planes[a], sizeof pf);
@@ -319,8 +323,7 @@ std::pair<uint32_t, uint32_t> add_leaf(Layout& layout, std::span<const Triangle>
     const uint32_t first = uint32_t(layout.packs.size());
     for (size_t k = 0; k < live.size(); ++k) {
         if (k % 4 == 0) layout.packs.emplace_back();
-        trace::TrianglePack& pack = layout.packs.back();
-        std::memset(&pack, 0, k % 4 == 0 ? sizeof pack : 0);
+        trace::TrianglePack& pack = layout.packs.back();  // value-initialised: unused lanes are zero
         const Triangle& tri = triangles[live[k]];
         const int lane = int(k % 4);
         for (int v = 0; v < 3; ++v)
@@ -401,14 +404,24 @@ inline void traverse_all(const Layout& layout, const RayContext& r, OnLeaf&& on_
     while (top > 0) {
         const QueryNode& node = layout.nodes[stack[--top]];
         double near[2];
-        unsigned mask = enter_children(node, r.slabs, tmin, tmax, near);
-        while (mask) {
-            const int slot = __builtin_ctz(mask);
-            mask &= mask - 1;
-            if (node.count[slot] == 0)
+        const unsigned mask = enter_children(node, r.slabs, tmin, tmax, near);
+        // Inner children first, fetched ahead while the leaves are tested (the walk of an incoherent
+        // ray waits on memory more than on arithmetic).
+        unsigned leaves = 0;
+        for (int slot = 0; slot < 2; ++slot) {
+            if (!((mask >> slot) & 1)) continue;
+            if (node.count[slot] == 0) {
+                __builtin_prefetch(&layout.nodes[node.child[slot]]);
                 stack[top++] = node.child[slot];
-            else if (on_leaf(node.child[slot], node.count[slot]))
-                return;
+            } else {
+                __builtin_prefetch(&layout.packs[node.child[slot]]);
+                leaves |= 1u << slot;
+            }
+        }
+        while (leaves) {
+            const int slot = __builtin_ctz(leaves);
+            leaves &= leaves - 1;
+            if (on_leaf(node.child[slot], node.count[slot])) return;
         }
     }
 }
@@ -489,6 +502,7 @@ std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
         for (int k = 1; k >= 0; --k) {
             const int slot = order[k];
             if (!((mask >> slot) & 1) || node.count[slot] != 0) continue;
+            __builtin_prefetch(&layout.nodes[node.child[slot]]);
             stack[top++] = {node.child[slot], near[slot]};
         }
         for (int k = 0; k < 2; ++k) {
