@@ -21,6 +21,8 @@
 #include <string>
 
 #include "spacebvh/error.hpp"
+#include "spacebvh/scene.hpp"
+#include "spacebvh/tracer.hpp"
 #include "trace/triangle_pack.hpp"
 #include "trace/watertight_triangle.hpp"
 
@@ -304,6 +306,10 @@ struct RayQueries::Layout {
     std::vector<QueryNode> nodes;
     trace::TrianglePacks packs;
     size_t triangle_count = 0;
+    // The fastest closest-hit kernel over the same tree, and the triangles: the first and any crossing
+    // start from its closed-triangle answer (see first_crossing).
+    std::vector<Triangle> triangles;
+    std::unique_ptr<Tracer> tracer;
 };
 
 namespace {
@@ -559,6 +565,41 @@ void check_sizes(size_t a, size_t b, const char* what) {
     if (a != b) throw Error(std::string("queries: ") + what + ": " + std::to_string(a) + " inputs but room for " + std::to_string(b) + " answers");
 }
 
+// Whether the ray passes strictly inside the triangle: every edge function exactly nonzero and of one
+// sign (no perturbation needed).
+bool crosses_interior(const Ray& ray, const Triangle& tri) {
+    auto exact_sign = [&](Vec3 p, Vec3 q) {
+        const DVec a = dsub(p, ray.org), b = dsub(q, ray.org);
+        const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
+        const double value = dx * (a.y * b.z - a.z * b.y) + dy * (a.z * b.x - a.x * b.z) + dz * (a.x * b.y - a.y * b.x);
+        const double magnitude = std::fabs(dx) * (std::fabs(a.y * b.z) + std::fabs(a.z * b.y)) +
+                                 std::fabs(dy) * (std::fabs(a.z * b.x) + std::fabs(a.x * b.z)) +
+                                 std::fabs(dz) * (std::fabs(a.x * b.y) + std::fabs(a.y * b.x));
+        if (std::fabs(value) > 16.0 * 0x1p-53 * magnitude + 0x1p-1000) return value > 0 ? 1 : -1;
+        return edge_sign_exact(ray, p, q);
+    };
+    const int su = exact_sign(tri.v1, tri.v2);
+    return su != 0 && exact_sign(tri.v2, tri.v0) == su && exact_sign(tri.v0, tri.v1) == su;
+}
+
+// The first crossing from the closed-triangle closest hit of the tracer (exact, ../shared/spec/rays.md).
+// Crossings are a subset of closed hits, so a closed miss means no crossing; and a closest closed hit
+// through the triangle's interior, within [tmin, tmax] decided exactly, is the first crossing. Only a
+// closest hit on an edge or vertex (or at an end of the interval) needs the query's own walk. Ties
+// between triangles crossed at the very same t (overlapping triangles) go to whichever the kernel
+// reports.
+std::optional<QueryHit> first_crossing(const Layout& layout, const Ray& ray, const Hit& closed) {
+    if (!closed.is_hit()) return std::nullopt;
+    const Triangle& tri = layout.triangles[closed.primitive];
+    double t;
+    if (crosses_interior(ray, tri) && crossing_in_range(ray, tri.v0, tri.v1, tri.v2, ray.tmax, t))
+        return make_hit(ray, tri.v0, tri.v1, tri.v2, closed.primitive, t);
+    return nearest_crossing(layout, ray);
+}
+
+// The tracers take rays with tmin >= 0 (the spec's rays); others take the query's own walk.
+bool tracer_takes(const Layout& layout, const Ray& ray) { return layout.tracer && ray.tmin >= 0.0f; }
+
 }  // namespace
 
 std::optional<QueryHit> intersect_triangle_perturbed(const Ray& ray, const Triangle& triangle, uint32_t id) {
@@ -585,6 +626,12 @@ RayQueries::RayQueries(std::span<const Triangle> triangles, const Bvh& bvh) : la
     } else {
         add_node(*layout_, triangles, bvh, 0, 0);
     }
+    Scene scene;
+    scene.name = "queries";
+    scene.triangles.assign(triangles.begin(), triangles.end());
+    for (const Triangle& t : scene.triangles) scene.degenerate_count += t.is_degenerate();
+    layout_->tracer = make_tracer("auto", scene, bvh);
+    layout_->triangles = std::move(scene.triangles);
 }
 
 RayQueries::~RayQueries() = default;
@@ -595,12 +642,14 @@ size_t RayQueries::triangle_count() const { return layout_->triangle_count; }
 
 std::optional<QueryHit> RayQueries::first_hit(const Ray& ray) const {
     check_ray(ray);
-    return nearest_crossing(*layout_, ray);
+    if (!tracer_takes(*layout_, ray)) return nearest_crossing(*layout_, ray);
+    return first_crossing(*layout_, ray, layout_->tracer->intersect(ray));
 }
 
 bool RayQueries::any_hit(const Ray& ray) const {
     check_ray(ray);
-    return any_crossing(*layout_, ray);
+    if (!tracer_takes(*layout_, ray)) return any_crossing(*layout_, ray);
+    return first_crossing(*layout_, ray, layout_->tracer->intersect(ray)).has_value();
 }
 
 void RayQueries::all_hits(const Ray& ray, std::vector<QueryHit>& out, size_t max_hits) const {
@@ -621,17 +670,41 @@ bool RayQueries::contains(Vec3 point) const {
 
 void RayQueries::first_hits(std::span<const Ray> rays, std::span<QueryHit> out) const {
     check_sizes(rays.size(), out.size(), "first_hits");
-    for (const Ray& ray : rays) check_ray(ray);
+    bool all_taken = bool(layout_->tracer);
+    for (const Ray& ray : rays) {
+        check_ray(ray);
+        all_taken = all_taken && tracer_takes(*layout_, ray);
+    }
+    if (!all_taken) {
+        for_chunks(rays.size(), [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) out[i] = nearest_crossing(*layout_, rays[i]).value_or(QueryHit{});
+        });
+        return;
+    }
+    std::vector<Hit> closed(rays.size());
+    layout_->tracer->intersect(rays, closed);
     for_chunks(rays.size(), [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out[i] = nearest_crossing(*layout_, rays[i]).value_or(QueryHit{});
+        for (size_t i = begin; i < end; ++i) out[i] = first_crossing(*layout_, rays[i], closed[i]).value_or(QueryHit{});
     });
 }
 
 void RayQueries::any_hits(std::span<const Ray> rays, std::span<uint8_t> out) const {
     check_sizes(rays.size(), out.size(), "any_hits");
-    for (const Ray& ray : rays) check_ray(ray);
+    bool all_taken = bool(layout_->tracer);
+    for (const Ray& ray : rays) {
+        check_ray(ray);
+        all_taken = all_taken && tracer_takes(*layout_, ray);
+    }
+    if (!all_taken) {
+        for_chunks(rays.size(), [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) out[i] = any_crossing(*layout_, rays[i]) ? 1 : 0;
+        });
+        return;
+    }
+    std::vector<Hit> closed(rays.size());
+    layout_->tracer->intersect(rays, closed);
     for_chunks(rays.size(), [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out[i] = any_crossing(*layout_, rays[i]) ? 1 : 0;
+        for (size_t i = begin; i < end; ++i) out[i] = first_crossing(*layout_, rays[i], closed[i]).has_value() ? 1 : 0;
     });
 }
 
