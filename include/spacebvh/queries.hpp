@@ -58,9 +58,7 @@ public:
 
     size_t triangle_count() const;
 
-    // The crossing with the smallest t, or nothing. Crossings whose t differ by less than float32
-    // rounding (e.g. overlapping triangles) may come in either order here (all_hits orders them by
-    // (t, id)): it starts from the closest-hit kernel, which orders hits by float t.
+    // The crossing with the smallest t (ties: the smaller triangle id), or nothing.
     std::optional<QueryHit> first_hit(const Ray& ray) const;
     // Whether the ray crosses any triangle in [tmin, tmax].
     bool any_hit(const Ray& ray) const;

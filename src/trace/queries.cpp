@@ -23,7 +23,9 @@
 #include "spacebvh/error.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tracer.hpp"
+#include "trace/traversal_common.hpp"
 #include "trace/triangle_pack.hpp"
+#include "trace/wide_layout.hpp"
 #include "trace/watertight_triangle.hpp"
 
 namespace spacebvh {
@@ -306,10 +308,12 @@ struct RayQueries::Layout {
     std::vector<QueryNode> nodes;
     trace::TrianglePacks packs;
     size_t triangle_count = 0;
-    // The fastest closest-hit kernel over the same tree, and the triangles: the first and any crossing
-    // start from its closed-triangle answer (see first_crossing).
-    std::vector<Triangle> triangles;
-    std::unique_ptr<Tracer> tracer;
+#if defined(__AVX2__) && defined(__FMA__)
+    // The same tree collapsed to eight-wide nodes (wide_layout.hpp): the walk of every crossing visits
+    // a third of the nodes it visits in the binary layout. Rays with tmin >= 0 only (FusedSlabs).
+    trace::WideLayout<8> wide;
+    bool has_wide = false;
+#endif
 };
 
 namespace {
@@ -380,9 +384,9 @@ struct RayContext {
 // Tests a leaf's lanes; calls on_crossing(id, v0, v1, v2) for each triangle the perturbed ray crosses
 // transversally (the distance is left to the caller). Returns true when on_crossing asks to stop.
 template <class OnCrossing>
-inline bool visit_leaf(const Layout& layout, const RayContext& r, uint32_t first, uint32_t count, OnCrossing&& on_crossing) {
+inline bool visit_leaf(const trace::TrianglePack* packs, const RayContext& r, uint32_t first, uint32_t count, OnCrossing&& on_crossing) {
     for (uint32_t p = 0; p * 4 < count; ++p) {
-        const trace::TrianglePack& pack = layout.packs[first + p];
+        const trace::TrianglePack& pack = packs[first + p];
         const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
         trace::PackEdges edges;
         trace::pack_edges(pack, r.pack_ray, edges);
@@ -399,9 +403,80 @@ inline bool visit_leaf(const Layout& layout, const RayContext& r, uint32_t first
     return false;
 }
 
-// Visits every leaf the ray may cross within [tmin, tmax]. on_leaf(first, count) returns true to stop.
+#if defined(__AVX2__) && defined(__FMA__)
+// Eight-wide node test with the kernels' fused slab constants (traversal_common.hpp, FusedSlabs: why it
+// is conservative, and why a NaN from an axis the ray does not move along leaves the bounds alone by
+// the operand order of min and max). Empty slots hold empty boxes, which no ray enters.
+struct WideRay {
+    __m256 entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];
+    int entry_plane[3], exit_plane[3];
+    explicit WideRay(const Ray& ray) {
+        const trace::FusedSlabs slabs(ray);
+        for (int axis = 0; axis < 3; ++axis) {
+            entry_scale[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.entry_scale, axis));
+            entry_offset[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.entry_offset, axis));
+            exit_scale[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.exit_scale, axis));
+            exit_offset[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.exit_offset, axis));
+            const bool negative = (slabs.negative >> axis) & 1u;
+            entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
+            exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
+        }
+    }
+};
+
+inline unsigned wide_children(const trace::WideNode<8>& node, const WideRay& ray, float tmin, float tmax) {
+    __m256 near = _mm256_set1_ps(tmin), far = _mm256_set1_ps(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const __m256 t_entry = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
+        const __m256 t_exit = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        near = _mm256_max_ps(t_entry, near);
+        far = _mm256_min_ps(t_exit, far);
+    }
+    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, far, _CMP_LE_OQ)));
+}
+
+// Visits the leaves of the boxes the ray enters within [tmin, tmax]; tmax may shrink as it goes (the
+// first crossing narrows it to a float at or above the best t so far).
+template <class OnLeaf>
+inline void traverse_wide(const trace::WideLayout<8>& wide, const Ray& ray, const float& tmax, OnLeaf&& on_leaf) {
+    const WideRay boxes(ray);
+    uint32_t stack[kStackSize * 4];  // at most seven pushes per level
+    int top = 0;
+    stack[top++] = 0;
+    const trace::TrianglePack* packs = wide.packs.data();
+    while (top > 0) {
+        const trace::WideNode<8>& node = wide.nodes[stack[--top]];
+        const unsigned mask = wide_children(node, boxes, ray.tmin, tmax);
+        unsigned leaves = 0;
+        for (unsigned m = mask; m; m &= m - 1) {
+            const int slot = __builtin_ctz(m);
+            if (node.count[slot] == 0) {
+                __builtin_prefetch(&wide.nodes[node.child[slot]]);
+                stack[top++] = node.child[slot];
+            } else {
+                __builtin_prefetch(&packs[node.child[slot]]);
+                leaves |= 1u << slot;
+            }
+        }
+        for (; leaves; leaves &= leaves - 1) {
+            const int slot = __builtin_ctz(leaves);
+            if (on_leaf(packs, node.child[slot], node.count[slot])) return;
+        }
+    }
+}
+#endif
+
+// Visits every leaf the ray may cross within [tmin, tmax]. on_leaf(packs, first, count) returns true
+// to stop. A leaf may hold triangles of its neighbours too (LeafPacker): they are real triangles,
+// tested like the others, and the callers drop the repeats.
 template <class OnLeaf>
 inline void traverse_all(const Layout& layout, const RayContext& r, OnLeaf&& on_leaf) {
+#if defined(__AVX2__) && defined(__FMA__)
+    if (layout.has_wide && r.ray.tmin >= 0.0f) {
+        traverse_wide(layout.wide, r.ray, r.ray.tmax, on_leaf);
+        return;
+    }
+#endif
     if (layout.nodes.empty()) return;
     uint32_t stack[kStackSize];
     int top = 0;
@@ -427,7 +502,7 @@ inline void traverse_all(const Layout& layout, const RayContext& r, OnLeaf&& on_
         while (leaves) {
             const int slot = __builtin_ctz(leaves);
             leaves &= leaves - 1;
-            if (on_leaf(node.child[slot], node.count[slot])) return;
+            if (on_leaf(layout.packs.data(), node.child[slot], node.count[slot])) return;
         }
     }
 }
@@ -448,8 +523,8 @@ void collect_hits(const Layout& layout, const Ray& ray, std::vector<QueryHit>& o
     if (max_hits == 0) return;
     const RayContext r(ray);
     const double tmax = ray.tmax;
-    traverse_all(layout, r, [&](uint32_t first, uint32_t count) {
-        return visit_leaf(layout, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
             double t;
             if (crossing_in_range(ray, v0, v1, v2, tmax, t)) out.push_back(make_hit(ray, v0, v1, v2, id, t));
             return false;
@@ -467,8 +542,8 @@ uint32_t count_crossings(const Layout& layout, const Ray& ray, std::vector<uint3
     scratch.clear();
     const RayContext r(ray);
     const double tmax = ray.tmax;
-    traverse_all(layout, r, [&](uint32_t first, uint32_t count) {
-        return visit_leaf(layout, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
             double t;
             if (crossing_in_range(ray, v0, v1, v2, tmax, t)) scratch.push_back(id);
             return false;
@@ -484,6 +559,32 @@ uint32_t count_crossings(const Layout& layout, const Ray& ray, std::vector<uint3
 std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
     if (layout.nodes.empty()) return std::nullopt;
     const RayContext r(ray);
+#if defined(__AVX2__) && defined(__FMA__)
+    if (layout.has_wide && ray.tmin >= 0.0f) {
+        double best_t = ray.tmax;
+        float box_tmax = ray.tmax;
+        bool found = false;
+        uint32_t best_id = kInvalidIndex;
+        Vec3 best[3];
+        traverse_wide(layout.wide, ray, box_tmax, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+            visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+                double t;
+                if (!crossing_in_range(ray, v0, v1, v2, found ? best_t : double(ray.tmax), t)) return false;
+                if (found && (t > best_t || (t == best_t && id >= best_id))) return false;
+                found = true;
+                best_t = t;
+                best_id = id;
+                best[0] = v0, best[1] = v1, best[2] = v2;
+                // A float bound at or above t: boxes are entered conservatively up to it.
+                box_tmax = std::nextafter(float(t), kInfinity);
+                return false;
+            });
+            return false;
+        });
+        if (!found) return std::nullopt;
+        return make_hit(ray, best[0], best[1], best[2], best_id, best_t);
+    }
+#endif
     double best_t = ray.tmax;
     bool found = false;
     uint32_t best_id = kInvalidIndex;
@@ -514,7 +615,7 @@ std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
         for (int k = 0; k < 2; ++k) {
             const int slot = order[k];
             if (!((mask >> slot) & 1) || node.count[slot] == 0) continue;
-            visit_leaf(layout, r, node.child[slot], node.count[slot], [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+            visit_leaf(layout.packs.data(), r, node.child[slot], node.count[slot], [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
                 double t;
                 // Before the first hit the bound is the ray's own tmax (decided exactly); after it,
                 // the best t so far (compared in double: t values of crossings are all computed alike).
@@ -536,8 +637,8 @@ bool any_crossing(const Layout& layout, const Ray& ray) {
     const RayContext r(ray);
     bool found = false;
     const double tmax = ray.tmax;
-    traverse_all(layout, r, [&](uint32_t first, uint32_t count) {
-        return visit_leaf(layout, r, first, count, [&](uint32_t, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
             double t;
             found = crossing_in_range(ray, v0, v1, v2, tmax, t);
             return found;
@@ -565,40 +666,6 @@ void check_sizes(size_t a, size_t b, const char* what) {
     if (a != b) throw Error(std::string("queries: ") + what + ": " + std::to_string(a) + " inputs but room for " + std::to_string(b) + " answers");
 }
 
-// Whether the ray passes strictly inside the triangle: every edge function exactly nonzero and of one
-// sign (no perturbation needed).
-bool crosses_interior(const Ray& ray, const Triangle& tri) {
-    auto exact_sign = [&](Vec3 p, Vec3 q) {
-        const DVec a = dsub(p, ray.org), b = dsub(q, ray.org);
-        const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
-        const double value = dx * (a.y * b.z - a.z * b.y) + dy * (a.z * b.x - a.x * b.z) + dz * (a.x * b.y - a.y * b.x);
-        const double magnitude = std::fabs(dx) * (std::fabs(a.y * b.z) + std::fabs(a.z * b.y)) +
-                                 std::fabs(dy) * (std::fabs(a.z * b.x) + std::fabs(a.x * b.z)) +
-                                 std::fabs(dz) * (std::fabs(a.x * b.y) + std::fabs(a.y * b.x));
-        if (std::fabs(value) > 16.0 * 0x1p-53 * magnitude + 0x1p-1000) return value > 0 ? 1 : -1;
-        return edge_sign_exact(ray, p, q);
-    };
-    const int su = exact_sign(tri.v1, tri.v2);
-    return su != 0 && exact_sign(tri.v2, tri.v0) == su && exact_sign(tri.v0, tri.v1) == su;
-}
-
-// The first crossing from the closed-triangle closest hit of the tracer (exact, ../shared/spec/rays.md).
-// Crossings are a subset of closed hits, so a closed miss means no crossing; and a closest closed hit
-// through the triangle's interior, within [tmin, tmax] decided exactly, is the first crossing. Only a
-// closest hit on an edge or vertex (or at an end of the interval) needs the query's own walk. Ties
-// between triangles crossed at the very same t (overlapping triangles) go to whichever the kernel
-// reports.
-std::optional<QueryHit> first_crossing(const Layout& layout, const Ray& ray, const Hit& closed) {
-    if (!closed.is_hit()) return std::nullopt;
-    const Triangle& tri = layout.triangles[closed.primitive];
-    double t;
-    if (crosses_interior(ray, tri) && crossing_in_range(ray, tri.v0, tri.v1, tri.v2, ray.tmax, t))
-        return make_hit(ray, tri.v0, tri.v1, tri.v2, closed.primitive, t);
-    return nearest_crossing(layout, ray);
-}
-
-// The tracers take rays with tmin >= 0 (the spec's rays); others take the query's own walk.
-bool tracer_takes(const Layout& layout, const Ray& ray) { return layout.tracer && ray.tmin >= 0.0f; }
 
 }  // namespace
 
@@ -630,8 +697,10 @@ RayQueries::RayQueries(std::span<const Triangle> triangles, const Bvh& bvh) : la
     scene.name = "queries";
     scene.triangles.assign(triangles.begin(), triangles.end());
     for (const Triangle& t : scene.triangles) scene.degenerate_count += t.is_degenerate();
-    layout_->tracer = make_tracer("auto", scene, bvh);
-    layout_->triangles = std::move(scene.triangles);
+#if defined(__AVX2__) && defined(__FMA__)
+    layout_->wide = trace::collapse_to_wide<8>(scene, bvh, WideCollapse::sah_optimal);
+    layout_->has_wide = !layout_->wide.nodes.empty();
+#endif
 }
 
 RayQueries::~RayQueries() = default;
@@ -642,14 +711,12 @@ size_t RayQueries::triangle_count() const { return layout_->triangle_count; }
 
 std::optional<QueryHit> RayQueries::first_hit(const Ray& ray) const {
     check_ray(ray);
-    if (!tracer_takes(*layout_, ray)) return nearest_crossing(*layout_, ray);
-    return first_crossing(*layout_, ray, layout_->tracer->intersect(ray));
+    return nearest_crossing(*layout_, ray);
 }
 
 bool RayQueries::any_hit(const Ray& ray) const {
     check_ray(ray);
-    if (!tracer_takes(*layout_, ray)) return any_crossing(*layout_, ray);
-    return first_crossing(*layout_, ray, layout_->tracer->intersect(ray)).has_value();
+    return any_crossing(*layout_, ray);
 }
 
 void RayQueries::all_hits(const Ray& ray, std::vector<QueryHit>& out, size_t max_hits) const {
@@ -670,41 +737,17 @@ bool RayQueries::contains(Vec3 point) const {
 
 void RayQueries::first_hits(std::span<const Ray> rays, std::span<QueryHit> out) const {
     check_sizes(rays.size(), out.size(), "first_hits");
-    bool all_taken = bool(layout_->tracer);
-    for (const Ray& ray : rays) {
-        check_ray(ray);
-        all_taken = all_taken && tracer_takes(*layout_, ray);
-    }
-    if (!all_taken) {
-        for_chunks(rays.size(), [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) out[i] = nearest_crossing(*layout_, rays[i]).value_or(QueryHit{});
-        });
-        return;
-    }
-    std::vector<Hit> closed(rays.size());
-    layout_->tracer->intersect(rays, closed);
+    for (const Ray& ray : rays) check_ray(ray);
     for_chunks(rays.size(), [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out[i] = first_crossing(*layout_, rays[i], closed[i]).value_or(QueryHit{});
+        for (size_t i = begin; i < end; ++i) out[i] = nearest_crossing(*layout_, rays[i]).value_or(QueryHit{});
     });
 }
 
 void RayQueries::any_hits(std::span<const Ray> rays, std::span<uint8_t> out) const {
     check_sizes(rays.size(), out.size(), "any_hits");
-    bool all_taken = bool(layout_->tracer);
-    for (const Ray& ray : rays) {
-        check_ray(ray);
-        all_taken = all_taken && tracer_takes(*layout_, ray);
-    }
-    if (!all_taken) {
-        for_chunks(rays.size(), [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) out[i] = any_crossing(*layout_, rays[i]) ? 1 : 0;
-        });
-        return;
-    }
-    std::vector<Hit> closed(rays.size());
-    layout_->tracer->intersect(rays, closed);
+    for (const Ray& ray : rays) check_ray(ray);
     for_chunks(rays.size(), [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out[i] = first_crossing(*layout_, rays[i], closed[i]).has_value() ? 1 : 0;
+        for (size_t i = begin; i < end; ++i) out[i] = any_crossing(*layout_, rays[i]) ? 1 : 0;
     });
 }
 
