@@ -56,6 +56,46 @@ class Bvh:
     def stats(self, epo: bool = False) -> dict[str, Union[int, float]]:
         """Structure, memory and tree SAH (and EPO with epo=True) as a dict."""
 
+class RayQueries:
+    """Exact queries beyond the closest hit: every crossing, counts, first/any crossing, containment.
+    A ray through a shared edge or vertex of a connected surface crosses it once (docs/queries.md)."""
+
+    def __init__(self, bvh: Bvh, threads: int = 0) -> None: ...
+    @property
+    def scene(self) -> Scene: ...
+    @property
+    def threads(self) -> int: ...
+    def first(
+        self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
+    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """The first crossing of each ray: (t, primitive (-1 on a miss), u, v, points (k, 3) in the caller's frame)."""
+    def any(
+        self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
+    ) -> npt.NDArray[np.bool_]:
+        """Whether each ray crosses the mesh."""
+    def all(
+        self,
+        origins: _Rows,
+        directions: _Rows,
+        tmin: _PerRay = 0.0,
+        tmax: _PerRay = ...,
+        *,
+        max_hits: Optional[int] = None,
+        points: bool = True,
+        threads: Optional[int] = None,
+    ) -> Tuple[
+        npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]
+    ]:
+        """Every crossing sorted by ray then t: (index_ray, primitive, t, u, v, points (m, 3))."""
+    def count(
+        self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
+    ) -> npt.NDArray[np.int64]:
+        """The number of crossings of each ray."""
+    def contains(self, points: _Rows, *, threads: Optional[int] = None) -> npt.NDArray[np.bool_]:
+        """Whether each point is inside, by exact parity along containment_direction."""
+
+containment_direction: Tuple[float, float, float]
+
 class Tracer:
     """A traversal kernel over a tree; answers equal the exact arbiter of rays.md."""
 

@@ -74,6 +74,7 @@ py::class_<PyTracer> bind_tracer(py::module_& m);  // the class, for bind_render
 void bind_rays(py::module_& m);
 void bind_render(py::module_& m, py::class_<PyTracer>& tracer);
 void bind_embree(py::module_& m);
+void bind_queries(py::module_& m);  // queries.cpp: RayQueries
 
 // Closest hits as (t, primitive, u, v) arrays: t in the scene's dtype (inf on a miss), primitive
 // int64 (-1 on a miss), u, v float32. Used by every tracer binding.

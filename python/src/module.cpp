@@ -41,4 +41,5 @@ PYBIND11_MODULE(_core, m) {
     bind_render(m, tracer);
     bind_rays(m);
     bind_embree(m);
+    bind_queries(m);
 }
