@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -122,9 +123,11 @@ Vec3 coarse(Vec3 d) {
     return d;
 }
 
-// Rays that pass exactly through mesh vertices: origin o = v - d in float, kept only when o + d == v
-// exactly (checked in double, where the sum of two floats of nearby magnitude is exact).
-std::vector<Ray> rays_through_vertices(std::span<const Triangle> triangles, size_t count, uint64_t seed) {
+// Rays exactly through points of the mesh: origin o = m - d in float, kept only when o + d == m
+// exactly (checked in double, where the sum of two floats of nearby magnitude is exact), where m is
+// the vertex or edge midpoint `target(triangle, attempt)` returns (nothing when it is not a float).
+template <class Target>
+std::vector<Ray> rays_through(std::span<const Triangle> triangles, size_t count, uint64_t seed, Target&& target) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
     std::uniform_int_distribution<size_t> pick(0, triangles.size() - 1);
@@ -133,42 +136,32 @@ std::vector<Ray> rays_through_vertices(std::span<const Triangle> triangles, size
     const float scale = length(bounds.extent()) * 0.5f;
     std::vector<Ray> rays;
     for (size_t attempt = 0; rays.size() < count && attempt < count * 1000; ++attempt) {
-        const Triangle& tri = triangles[pick(rng)];
-        const Vec3 v = tri.vertex(int(attempt % 3));
+        const std::optional<Vec3> m = target(triangles[pick(rng)], int(attempt % 3));
         const Vec3 d = coarse({unit(rng) * scale, unit(rng) * scale, unit(rng) * scale});
-        const Vec3 o = v - d;
+        if (!m) continue;
+        const Vec3 o = *m - d;
         bool exact = true;
-        for (int a = 0; a < 3; ++a) exact = exact && double(o[a]) + double(d[a]) == double(v[a]);
+        for (int a = 0; a < 3; ++a) exact = exact && double(o[a]) + double(d[a]) == double((*m)[a]);
         if (exact) rays.push_back({o, d, 0.0f, kInfinity});
     }
     return rays;
 }
 
-// Rays exactly through edge midpoints: m = (p + q) / 2 when it is a float, and o = m - d as above.
+std::vector<Ray> rays_through_vertices(std::span<const Triangle> triangles, size_t count, uint64_t seed) {
+    return rays_through(triangles, count, seed, [](const Triangle& tri, int k) -> std::optional<Vec3> { return tri.vertex(k); });
+}
+
 std::vector<Ray> rays_through_edges(std::span<const Triangle> triangles, size_t count, uint64_t seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-    std::uniform_int_distribution<size_t> pick(0, triangles.size() - 1);
-    AABB bounds;
-    for (const Triangle& t : triangles) bounds.extend(t.bounds());
-    const float scale = length(bounds.extent()) * 0.5f;
-    std::vector<Ray> rays;
-    for (size_t attempt = 0; rays.size() < count && attempt < count * 1000; ++attempt) {
-        const Triangle& tri = triangles[pick(rng)];
-        const int k = int(attempt % 3);
-        const Vec3 p = tri.vertex(k), qq = tri.vertex((k + 1) % 3);
+    return rays_through(triangles, count, seed, [](const Triangle& tri, int k) -> std::optional<Vec3> {
+        const Vec3 p = tri.vertex(k), q = tri.vertex((k + 1) % 3);
         Vec3 m;
-        bool exact = true;
         for (int a = 0; a < 3; ++a) {
-            m[a] = float((double(p[a]) + double(qq[a])) * 0.5);
-            exact = exact && double(m[a]) == (double(p[a]) + double(qq[a])) * 0.5;
+            const double mid = (double(p[a]) + double(q[a])) * 0.5;
+            m[a] = float(mid);
+            if (double(m[a]) != mid) return std::nullopt;
         }
-        const Vec3 d = coarse({unit(rng) * scale, unit(rng) * scale, unit(rng) * scale});
-        const Vec3 o = m - d;
-        for (int a = 0; a < 3; ++a) exact = exact && double(o[a]) + double(d[a]) == double(m[a]);
-        if (exact) rays.push_back({o, d, 0.0f, kInfinity});
-    }
-    return rays;
+        return m;
+    });
 }
 
 // A closed, consistently oriented box of n x n quads per face with integer coordinates in [0, 2n]:

@@ -556,39 +556,51 @@ uint32_t count_crossings(const Layout& layout, const Ray& ray, std::vector<uint3
     return uint32_t(scratch.size());
 }
 
+// The nearest crossing found so far. Before the first, the bound is the ray's own tmax (decided
+// exactly); after it, the best t (compared in double: the t of every crossing is computed alike).
+struct Nearest {
+    const Ray& ray;
+    double t;
+    bool found = false;
+    uint32_t id = kInvalidIndex;
+    Vec3 vertex[3];
+
+    explicit Nearest(const Ray& r) : ray(r), t(r.tmax) {}
+    // Returns true when the triangle's crossing is the new nearest.
+    bool offer(uint32_t candidate, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+        double candidate_t;
+        if (!crossing_in_range(ray, v0, v1, v2, found ? t : double(ray.tmax), candidate_t)) return false;
+        if (found && (candidate_t > t || (candidate_t == t && candidate >= id))) return false;
+        found = true;
+        t = candidate_t;
+        id = candidate;
+        vertex[0] = v0, vertex[1] = v1, vertex[2] = v2;
+        return true;
+    }
+    std::optional<QueryHit> hit() const {
+        if (!found) return std::nullopt;
+        return make_hit(ray, vertex[0], vertex[1], vertex[2], id, t);
+    }
+};
+
 std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
     if (layout.nodes.empty()) return std::nullopt;
     const RayContext r(ray);
+    Nearest nearest(ray);
 #if defined(__AVX2__) && defined(__FMA__)
     if (layout.has_wide && ray.tmin >= 0.0f) {
-        double best_t = ray.tmax;
         float box_tmax = ray.tmax;
-        bool found = false;
-        uint32_t best_id = kInvalidIndex;
-        Vec3 best[3];
         traverse_wide(layout.wide, ray, box_tmax, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
             visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
-                double t;
-                if (!crossing_in_range(ray, v0, v1, v2, found ? best_t : double(ray.tmax), t)) return false;
-                if (found && (t > best_t || (t == best_t && id >= best_id))) return false;
-                found = true;
-                best_t = t;
-                best_id = id;
-                best[0] = v0, best[1] = v1, best[2] = v2;
                 // A float bound at or above t: boxes are entered conservatively up to it.
-                box_tmax = std::nextafter(float(t), kInfinity);
+                if (nearest.offer(id, v0, v1, v2)) box_tmax = std::nextafter(float(nearest.t), kInfinity);
                 return false;
             });
             return false;
         });
-        if (!found) return std::nullopt;
-        return make_hit(ray, best[0], best[1], best[2], best_id, best_t);
+        return nearest.hit();
     }
 #endif
-    double best_t = ray.tmax;
-    bool found = false;
-    uint32_t best_id = kInvalidIndex;
-    Vec3 best[3];
     struct Entry {
         uint32_t node;
         double near;
@@ -598,10 +610,10 @@ std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
     stack[top++] = {0, -std::numeric_limits<double>::infinity()};
     while (top > 0) {
         const Entry entry = stack[--top];
-        if (entry.near > best_t) continue;
+        if (entry.near > nearest.t) continue;
         const QueryNode& node = layout.nodes[entry.node];
         double near[2];
-        const unsigned mask = enter_children(node, r.slabs, ray.tmin, best_t, near);
+        const unsigned mask = enter_children(node, r.slabs, ray.tmin, nearest.t, near);
         if (!mask) continue;
         // Nearer child last on the stack (visited first); leaves are tested at once.
         int order[2] = {0, 1};
@@ -615,22 +627,14 @@ std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
         for (int k = 0; k < 2; ++k) {
             const int slot = order[k];
             if (!((mask >> slot) & 1) || node.count[slot] == 0) continue;
-            visit_leaf(layout.packs.data(), r, node.child[slot], node.count[slot], [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
-                double t;
-                // Before the first hit the bound is the ray's own tmax (decided exactly); after it,
-                // the best t so far (compared in double: t values of crossings are all computed alike).
-                if (!crossing_in_range(ray, v0, v1, v2, found ? best_t : double(ray.tmax), t)) return false;
-                if (found && (t > best_t || (t == best_t && id >= best_id))) return false;
-                found = true;
-                best_t = t;
-                best_id = id;
-                best[0] = v0, best[1] = v1, best[2] = v2;
-                return false;
-            });
+            visit_leaf(layout.packs.data(), r, node.child[slot], node.count[slot],
+                       [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+                           nearest.offer(id, v0, v1, v2);
+                           return false;
+                       });
         }
     }
-    if (!found) return std::nullopt;
-    return make_hit(ray, best[0], best[1], best[2], best_id, best_t);
+    return nearest.hit();
 }
 
 bool any_crossing(const Layout& layout, const Ray& ray) {
