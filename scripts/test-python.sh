@@ -4,7 +4,7 @@
 # scripts/test.sh runs it after the C++ suite; run alone it builds the C++ itself (through pip).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-venv=build/venv
+venv="$PWD/build/venv"
 rm -rf "$venv" build-pip
 mkdir -p build
 python3 -m venv "$venv"
