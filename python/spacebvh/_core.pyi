@@ -94,7 +94,8 @@ class RayQueries:
     def contains(self, points: _Rows, *, threads: Optional[int] = None) -> npt.NDArray[np.bool_]:
         """Whether each point is inside, by exact parity along containment_direction."""
 
-containment_direction: Tuple[float, float, float]
+def containment_direction() -> Tuple[float, float, float]:
+    """The fixed direction of the rays RayQueries.contains counts crossings along."""
 
 class Tracer:
     """A traversal kernel over a tree; answers equal the exact arbiter of rays.md."""

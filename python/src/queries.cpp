@@ -175,9 +175,11 @@ void bind_queries(py::module_& m) {
         .def("contains", &contains, py::arg("points"), py::kw_only(), py::arg("threads") = py::none(),
              "Whether each point (n, 3) is inside the mesh by the parity of the crossings of a fixed ray from it (exact; "
              "the same answer on every run and thread count). Meaningful for closed meshes; a point on the surface "
-             "counts as the point moved infinitesimally against containment_direction.");
-    m.attr("containment_direction") =
-        py::make_tuple(kContainmentDirection.x, kContainmentDirection.y, kContainmentDirection.z);
+             "counts as the point moved infinitesimally against containment_direction().");
+    m.def(
+        "containment_direction",
+        [] { return py::make_tuple(kContainmentDirection.x, kContainmentDirection.y, kContainmentDirection.z); },
+        "The fixed direction (float32 values) of the rays RayQueries.contains counts crossings along.");
 }
 
 }  // namespace spacebvh::python

@@ -223,7 +223,7 @@ def test_containment_is_stable_and_matches_parity():
     assert not first[outside].any()
     # Points on the surface against the exact parity count.
     triangles = exact_triangles(vertices, faces)
-    direction = np.float32(spacebvh.containment_direction)
+    direction = np.float32(spacebvh.containment_direction())
     for p, answer in zip(points[3000:3200], first[3000:3200]):
         assert answer == (len(reference_hits(triangles, p, direction)) % 2 == 1)
 
