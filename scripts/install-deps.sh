@@ -12,7 +12,8 @@ packages=(
   libcli11-dev          # command line
   nlohmann-json3-dev    # --json output
   libgtest-dev          # tests
-  python3-dev pybind11-dev python3-numpy  # the Python module (python/) and its test
+  libgmp-dev            # exact rational reference in the query tests
+  python3-dev python3-venv  # the Python package (pyproject.toml): headers, and venv for the tests
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -23,10 +24,4 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
-# The Python module is built for the `python3` on PATH (scripts/build.sh). When that is not Debian's
-# own (a pyenv or venv interpreter), it needs NumPy too, and NumPy 1: Debian 12's pybind11 (2.10)
-# predates NumPy 2's array structures.
-if ! python3 -c "import numpy, sys; sys.exit(numpy.__version__[0] != '1')" 2>/dev/null; then
-  python3 -m pip install --quiet "numpy<2"
 fi

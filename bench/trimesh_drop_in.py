@@ -1,0 +1,105 @@
+# SPDX-License-Identifier: MIT
+"""trimesh with embreex against trimesh patched with spacebvh: the same rays, one run.
+
+Not a test: it times intersects_first, intersects_any, intersects_location (multiple hits) and
+contains_points on the bunny and crytek_sponza from ../shared/scenes and prints rays per second and
+the ratios. Needs `pip install trimesh embreex` and spacebvh in the same environment.
+
+    python bench/trimesh_drop_in.py [--rays 1000000] [--threads 2] [--scenes bunny crytek_sponza]
+
+The rays: origins uniform in the scene's bounding box, directions uniform on the sphere (seeded);
+containment points uniform in the bounding box. Tree builds (ours) and scene builds (Embree) are
+timed apart from the queries. Agreement is reported, not asserted: where they differ, trimesh+embreex
+is the one that can be wrong (float32, re-query offsets, parity noise).
+"""
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+import spacebvh
+import spacebvh.trimesh as drop_in
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT.parent / "shared" / "scenes"
+
+
+def rays_for(mesh, count, seed):
+    rng = np.random.default_rng(seed)
+    lo, hi = mesh.bounds
+    origins = rng.uniform(lo, hi, (count, 3))
+    directions = rng.normal(size=(count, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    return origins, directions
+
+
+def timed(function, *args, **kwargs):
+    start = time.perf_counter()
+    result = function(*args, **kwargs)
+    return time.perf_counter() - start, result
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rays", type=int, default=1_000_000)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    parser.add_argument("--builder", default="binned")
+    args = parser.parse_args()
+
+    import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
+    import embreex
+
+    print(f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "
+          f"{args.rays} rays, spacebvh threads={args.threads}, builder {args.builder}")
+    rows = []
+    for name in args.scenes:
+        path = SCENES / name / f"{name}.obj"
+        if not path.exists():
+            print(f"skipping {name}: no {path}")
+            continue
+        loaded = trimesh.load(str(path), force="mesh", process=False)
+        vertices, faces = np.asarray(loaded.vertices), np.asarray(loaded.faces)
+        theirs = trimesh.Trimesh(vertices, faces, process=False)  # Embree backend
+        ours = trimesh.Trimesh(vertices, faces, process=False)
+        ours.ray = drop_in.RayMeshIntersector(ours, builder=args.builder, threads=args.threads)
+        assert type(theirs.ray).__module__ == "trimesh.ray.ray_pyembree", type(theirs.ray)
+        origins, directions = rays_for(loaded, args.rays, 1)
+        points = rays_for(loaded, args.rays, 2)[0]
+
+        # Builds, apart from the queries.
+        build_theirs, _ = timed(theirs.ray.intersects_first, origins[:1], directions[:1])
+        build_ours, _ = timed(ours.ray.intersects_first, origins[:1], directions[:1])
+        print(f"\n{name}: {len(faces)} triangles; first-query build: embree {build_theirs:.2f} s, spacebvh {build_ours:.2f} s")
+
+        queries = [
+            ("intersects_first", lambda m: m.ray.intersects_first(origins, directions)),
+            ("intersects_any", lambda m: m.ray.intersects_any(origins, directions)),
+            ("intersects_location", lambda m: m.ray.intersects_location(origins, directions, multiple_hits=True)),
+            ("contains_points", lambda m: m.ray.contains_points(points)),
+        ]
+        for label, query in queries:
+            t_theirs, a = timed(query, theirs)
+            t_ours, b = timed(query, ours)
+            if label == "intersects_location":
+                agree = np.mean(np.bincount(a[1], minlength=args.rays) == np.bincount(b[1], minlength=args.rays))
+                hits = f", hits {len(a[1])} vs {len(b[1])}"
+            else:
+                agree = np.mean(np.asarray(a) == np.asarray(b))
+                hits = ""
+            ratio = t_theirs / t_ours
+            rows.append((name, label, args.rays / t_theirs / 1e6, args.rays / t_ours / 1e6, ratio))
+            print(f"  {label:20s} embree {args.rays / t_theirs / 1e6:7.3f} Mrays/s ({t_theirs:6.2f} s)   "
+                  f"spacebvh {args.rays / t_ours / 1e6:7.3f} Mrays/s ({t_ours:6.2f} s)   ratio {ratio:6.1f}x   "
+                  f"same answer {100 * agree:.2f} %{hits}")
+
+    print("\nscene           query                 embree Mrays/s  spacebvh Mrays/s  ratio")
+    for name, label, theirs, ours, ratio in rows:
+        print(f"{name:15s} {label:20s} {theirs:15.3f} {ours:17.3f} {ratio:6.1f}x")
+
+
+if __name__ == "__main__":
+    main()

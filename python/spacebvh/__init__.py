@@ -1,0 +1,72 @@
+# SPDX-License-Identifier: MIT
+"""spacebvh: BVHs built by space subdivision (Popov et al. 2009) and exact ray traversal.
+
+Scenes come from files (``load_scene``) or NumPy meshes (``mesh``); ``build`` makes a tree with a
+named builder; a ``Tracer`` answers batches of NumPy rays with the exact arbiter's closest or any
+hits, releasing the GIL and using every core (``threads=`` limits that). float64 meshes keep their
+precision at large coordinates: they are traced in a frame centred on their bounds and answer in the
+caller's frame as float64. Errors in input or options raise ``spacebvh.Error`` (a RuntimeError and
+a ValueError) naming the argument and the element; wrong dtypes raise TypeError.
+
+Example::
+
+    import numpy as np, spacebvh
+    scene = spacebvh.mesh(vertices, faces)             # (n, 3) floats, (m, 3) integers
+    tracer = spacebvh.Tracer(spacebvh.build(scene, "spatial"))
+    t, primitive, u, v = tracer.intersect(origins, directions)
+    points = scene.hit_points(primitive, u, v)
+"""
+
+from . import _core
+from ._core import (
+    Bvh,
+    EmbreeTracer,
+    Error,
+    RayQueries,
+    Scene,
+    Tracer,
+    build,
+    builders,
+    builtin_scenes,
+    containment_direction,
+    diffuse_rays,
+    kernels,
+    load_scene,
+    mesh,
+    primary_rays,
+    random_rays,
+    read_hits,
+    read_rays,
+    write_hits,
+    write_png,
+    write_rays,
+)
+from .cli import executable as cli_executable
+
+__version__: str = _core.__version__
+
+__all__ = [
+    "Bvh",
+    "EmbreeTracer",
+    "Error",
+    "RayQueries",
+    "Scene",
+    "Tracer",
+    "__version__",
+    "build",
+    "builders",
+    "builtin_scenes",
+    "cli_executable",
+    "containment_direction",
+    "diffuse_rays",
+    "kernels",
+    "load_scene",
+    "mesh",
+    "primary_rays",
+    "random_rays",
+    "read_hits",
+    "read_rays",
+    "write_hits",
+    "write_png",
+    "write_rays",
+]

@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: MIT
+// What the files of the extension module spacebvh._core share: the Python-side objects (a scene with
+// its frame, a tree with its scene, a tracer with both), running work on a bounded number of
+// oneTBB threads, and one bind_* function per concern (module.cpp calls them in order).
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <tbb/task_arena.h>
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "numpy_args.hpp"
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/tools/scene.hpp"
+#include "spacebvh/trace.hpp"
+
+namespace spacebvh::python {
+
+using namespace spacebvh::tools;
+
+namespace py = pybind11;
+
+// A scene (immutable once made, shared by the trees and tracers over it) and the frame its
+// coordinates are in.
+struct PyScene {
+    std::shared_ptr<const Scene> scene;
+    Frame frame;
+};
+
+// A tree with the scene it was built over (a tracer needs both).
+struct PyBvh {
+    PyScene scene;
+    std::shared_ptr<const Bvh> bvh;
+};
+
+struct PyTracer {
+    PyScene scene;
+    std::shared_ptr<const Bvh> bvh;
+    std::unique_ptr<Tracer> tracer;
+    int threads = 0;
+};
+
+// Checks a `threads` argument: 0 = every core, n > 0 at most n threads.
+inline void check_threads(int threads) {
+    if (threads < 0) throw Error("threads must be >= 0 (0 = every core), not " + std::to_string(threads));
+}
+
+// Runs `work` in an arena of `threads` oneTBB threads (0: the default, every core). Call without the GIL.
+template <typename Work>
+void in_arena(int threads, Work&& work) {
+    check_threads(threads);
+    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : threads);
+    arena.execute(std::forward<Work>(work));
+}
+
+// The same, releasing the GIL for the duration.
+template <typename Work>
+void without_gil(int threads, Work&& work) {
+    check_threads(threads);
+    py::gil_scoped_release unlocked;
+    in_arena(threads, std::forward<Work>(work));
+}
+
+// A camera string ('ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy') in the caller's frame, taken into the scene's;
+// empty: the scene's default camera of ../shared/spec/rays.md.
+Camera camera_in_frame(const PyScene& scene, const std::string& text);
+
+void bind_scenes(py::module_& m);
+void bind_build(py::module_& m);
+py::class_<PyTracer> bind_tracer(py::module_& m);  // the class, for bind_render's methods
+void bind_rays(py::module_& m);
+void bind_render(py::module_& m, py::class_<PyTracer>& tracer);
+void bind_embree(py::module_& m);
+void bind_queries(py::module_& m);  // queries.cpp: RayQueries
+
+// Closest hits as (t, primitive, u, v) arrays: t in the scene's dtype (inf on a miss), primitive
+// int64 (-1 on a miss), u, v float32. Used by every tracer binding.
+py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits);
+py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers);
+
+}  // namespace spacebvh::python

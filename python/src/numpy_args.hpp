@@ -1,0 +1,129 @@
+// SPDX-License-Identifier: MIT
+// NumPy arguments read in place: (n, 3) float32/float64 arrays of any strides (C- or F-ordered,
+// sliced), integer index arrays of any width, numbers or arrays of one value per ray. Nothing is
+// copied into an intermediate array; the readers keep the array alive and may be used without the
+// GIL. Wrong shapes raise spacebvh.Error and wrong dtypes TypeError, both naming the argument.
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "spacebvh/geometry.hpp"
+
+namespace spacebvh::python {
+
+namespace py = pybind11;
+
+// Where a scene's local coordinates sit in the caller's: caller = local + origin, in double. Meshes
+// given in float64 are taken into a frame centred on their bounds before rounding to float32, so
+// the float32 kernels keep the precision of small coordinates wherever the mesh lies; `float64`
+// also says that coordinates and distances come back to the caller as float64.
+struct Frame {
+    std::array<double, 3> origin{0.0, 0.0, 0.0};
+    bool float64 = false;
+
+    float to_local(double caller, int axis) const { return float(caller - origin[size_t(axis)]); }
+    double to_caller(float local, int axis) const { return double(local) + origin[size_t(axis)]; }
+};
+
+// One coordinate of row `row`, as double, from a typed strided buffer.
+template <typename T>
+struct StridedRows {
+    const char* data;
+    py::ssize_t row_stride;  // 0 for a single row broadcast to every row
+    py::ssize_t column_stride;
+    double operator()(size_t row, int axis) const {
+        return double(*reinterpret_cast<const T*>(data + py::ssize_t(row) * row_stride + axis * column_stride));
+    }
+};
+
+// A read-only (n, 3) array of float32 or float64 (other real dtypes are converted to float64 once).
+// With allow_single, a (3,) or (1, 3) array is one row, broadcast by `rows_for`.
+class RealRows {
+public:
+    RealRows() = default;
+    static RealRows from(const py::handle& object, const char* what, bool allow_single = false);
+
+    size_t rows() const { return rows_; }
+    bool single() const { return single_; }
+    bool is_float64() const { return float64_; }
+    const char* name() const { return what_; }
+
+    // Calls f(StridedRows<float>) or f(StridedRows<double>).
+    template <typename F>
+    decltype(auto) visit(F&& f) const {
+        if (float64_) return f(StridedRows<double>{data_, row_stride_, column_stride_});
+        return f(StridedRows<float>{data_, row_stride_, column_stride_});
+    }
+
+private:
+    py::object array_;  // keeps the array alive
+    const char* what_ = "";
+    const char* data_ = nullptr;
+    py::ssize_t row_stride_ = 0, column_stride_ = 0;
+    size_t rows_ = 0;
+    bool float64_ = false, single_ = false;
+};
+
+// A read-only (m, 3) array of integers of any width and signedness.
+class IndexRows {
+public:
+    static IndexRows from(const py::handle& object, const char* what);
+    size_t rows() const { return rows_; }
+    // The index at (row, column); unsigned values beyond int64 come back as int64's maximum (out of
+    // range of any mesh either way).
+    int64_t operator()(size_t row, int column) const;
+
+private:
+    py::object array_;  // keeps the array alive
+    const char* data_ = nullptr;
+    py::ssize_t row_stride_ = 0, column_stride_ = 0;
+    size_t rows_ = 0;
+    int item_size_ = 8;
+    bool is_signed_ = true;
+};
+
+// One number per ray: a Python or NumPy number shared by every ray, or a 1-D array of one per ray.
+class PerRay {
+public:
+    static PerRay from(const py::handle& object, size_t rays, const char* what);
+    double operator[](size_t i) const {
+        if (data_ == nullptr) return constant_;
+        const char* p = data_ + py::ssize_t(i) * stride_;
+        return float64_ ? *reinterpret_cast<const double*>(p) : double(*reinterpret_cast<const float*>(p));
+    }
+
+private:
+    double constant_ = 0.0;
+    py::object array_;  // keeps the array alive (null for a constant)
+    const char* data_ = nullptr;
+    py::ssize_t stride_ = 0;
+    bool float64_ = false;
+};
+
+// The number of rays that origins and directions describe: both have k rows, or one of them a single
+// row broadcast to the other's k. Throws Error naming both otherwise.
+size_t ray_count(const RealRows& origins, const RealRows& directions);
+
+// Rays in the scene's local frame from caller-frame origins and directions and per-ray [tmin, tmax];
+// each ray checked as ray files are (untraceable_ray_reason), the first bad one named (the lowest
+// index, whatever the thread count). Call without the GIL, inside the arena that should do the work.
+std::vector<Ray> make_rays(const Frame& frame, const RealRows& origins, const RealRows& directions, const PerRay& tmin,
+                           const PerRay& tmax);
+
+// Parses the Python arguments (with the GIL) and makes the rays in the arena of `threads` threads
+// without it.
+std::vector<Ray> rays_from_arguments(const Frame& frame, const py::handle& origins, const py::handle& directions,
+                                     const py::handle& tmin, const py::handle& tmax, int threads);
+
+// A fresh (n,) or (n, 3) array of float32 or float64, by the frame.
+py::array new_real_array(bool float64, std::vector<py::ssize_t> shape);
+
+}  // namespace spacebvh::python

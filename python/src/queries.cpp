@@ -1,0 +1,186 @@
+// SPDX-License-Identifier: MIT
+// Exact multi-hit queries (include/spacebvh/queries.hpp) on NumPy rays: every crossing, crossing
+// counts, first and any crossing, and containment, each crossing of a surface reported once.
+#include <optional>
+
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "spacebvh/queries.hpp"
+
+namespace spacebvh::python {
+
+namespace {
+
+struct PyQueries {
+    PyScene scene;
+    std::shared_ptr<const RayQueries> queries;
+    int threads = 0;
+};
+
+int threads_for(const PyQueries& self, std::optional<int> threads) { return threads ? *threads : self.threads; }
+
+// Points of hits in the caller's frame, float64 (computed in double from the triangle).
+void put_point(const Frame& frame, const QueryHit& hit, double* out) {
+    for (int axis = 0; axis < 3; ++axis) out[axis] = hit.point[size_t(axis)] + frame.origin[size_t(axis)];
+}
+
+py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
+                     const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<QueryHit> hits(rays.size());
+    without_gil(threads, [&] { self.queries->first_hits(rays, hits); });
+    const py::ssize_t n = py::ssize_t(hits.size());
+    py::array_t<double> t(n), u(n), v(n), points(std::vector<py::ssize_t>{n, 3});
+    py::array_t<int64_t> primitive(n);
+    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(), *p_out = points.mutable_data();
+    int64_t* id_out = primitive.mutable_data();
+    {
+        py::gil_scoped_release unlocked;
+        const double nan = std::numeric_limits<double>::quiet_NaN();
+        for (size_t i = 0; i < hits.size(); ++i) {
+            const QueryHit& hit = hits[i];
+            const bool is_hit = hit.is_hit();
+            t_out[i] = is_hit ? hit.t : std::numeric_limits<double>::infinity();
+            id_out[i] = is_hit ? int64_t(hit.primitive) : -1;
+            u_out[i] = is_hit ? hit.u : 0.0;
+            v_out[i] = is_hit ? hit.v : 0.0;
+            if (is_hit)
+                put_point(self.scene.frame, hit, p_out + 3 * i);
+            else
+                p_out[3 * i] = p_out[3 * i + 1] = p_out[3 * i + 2] = nan;
+        }
+    }
+    return py::make_tuple(t, primitive, u, v, points);
+}
+
+py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
+                           const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<uint8_t> answers(rays.size());
+    without_gil(threads, [&] { self.queries->any_hits(rays, answers); });
+    return answers_as_array(answers);
+}
+
+py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
+                   const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    if (max_hits && *max_hits < 0) throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    HitLists lists;
+    without_gil(threads, [&] { lists = self.queries->all_hits(rays, max_hits ? size_t(*max_hits) : kNoHitLimit); });
+    const py::ssize_t m = py::ssize_t(lists.hits.size());
+    py::array_t<int64_t> index_ray(m), primitive(m);
+    py::array_t<double> t(m), u(m), v(m);
+    py::array_t<double> points(std::vector<py::ssize_t>{points_wanted ? m : 0, 3});
+    int64_t *ray_out = index_ray.mutable_data(), *id_out = primitive.mutable_data();
+    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(), *p_out = points.mutable_data();
+    {
+        py::gil_scoped_release unlocked;
+        for (size_t r = 0; r < rays.size(); ++r)
+            for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
+                const QueryHit& hit = lists.hits[k];
+                ray_out[k] = int64_t(r);
+                id_out[k] = int64_t(hit.primitive);
+                t_out[k] = hit.t;
+                u_out[k] = hit.u;
+                v_out[k] = hit.v;
+                if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
+            }
+    }
+    return py::make_tuple(index_ray, primitive, t, u, v, points);
+}
+
+py::array_t<int64_t> count_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
+                                const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<uint32_t> counts(rays.size());
+    without_gil(threads, [&] { self.queries->count_hits(rays, counts); });
+    py::array_t<int64_t> result(py::ssize_t(counts.size()));
+    int64_t* out = result.mutable_data();
+    for (size_t i = 0; i < counts.size(); ++i) out[i] = counts[i];
+    return result;
+}
+
+py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const RealRows rows = RealRows::from(points_arg, "points");
+    std::vector<Vec3> points(rows.rows());
+    std::vector<uint8_t> answers(points.size());
+    const Frame& frame = self.scene.frame;
+    without_gil(threads, [&] {
+        rows.visit([&](auto read) {
+            for (size_t i = 0; i < points.size(); ++i) {
+                for (int axis = 0; axis < 3; ++axis) {
+                    const double value = read(i, axis);
+                    if (!std::isfinite(value))
+                        throw Error("points: row " + std::to_string(i) + " is not finite");
+                    points[i][axis] = frame.to_local(value, axis);
+                }
+            }
+        });
+        self.queries->contains(points, answers);
+    });
+    return answers_as_array(answers);
+}
+
+constexpr const char* kRaysDoc =
+    "Rays from origins (k, 3) along directions (k, 3) (either may be one row shared by every ray) over the closed "
+    "interval [tmin, tmax] (numbers, or arrays of one per ray). ";
+
+}  // namespace
+
+void bind_queries(py::module_& m) {
+    py::class_<PyQueries>(m, "RayQueries",
+                          "Exact queries beyond the closest hit over a tree: every crossing of each ray (sorted by t), "
+                          "crossing counts, the first and any crossing, and point containment by parity. A ray through a "
+                          "shared edge or vertex of a connected surface crosses it once: the answers are those of the ray "
+                          "moved sideways by a fixed infinitesimal amount (docs/queries.md). Batch calls release the GIL.")
+        .def(py::init([](const PyBvh& tree, int threads) {
+                 check_threads(threads);
+                 std::shared_ptr<const RayQueries> queries;
+                 {
+                     py::gil_scoped_release unlocked;
+                     queries = std::make_shared<const RayQueries>(tree.scene.scene->triangles, *tree.bvh);
+                 }
+                 return PyQueries{tree.scene, std::move(queries), threads};
+             }),
+             py::arg("bvh"), py::arg("threads") = 0,
+             "Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).")
+        .def_property_readonly("scene", [](const PyQueries& self) { return self.scene; }, "The scene queried.")
+        .def_property_readonly("threads", [](const PyQueries& self) { return self.threads; },
+                               "The default thread limit of batch calls (0 = every core).")
+        .def("first", &first_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             (std::string(kRaysDoc) +
+              "The first crossing of each ray: (t float64 (inf on a miss), primitive int64 (-1 on a miss), u, v float64 "
+              "barycentrics of the second and third corners, points (k, 3) float64 in the caller's frame (NaN on a miss)).")
+                 .c_str())
+        .def("any", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             (std::string(kRaysDoc) + "Whether each ray crosses the mesh: a bool array.").c_str())
+        .def("all", &all_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("max_hits") = py::none(),
+             py::arg("points") = true, py::arg("threads") = py::none(),
+             (std::string(kRaysDoc) +
+              "Every crossing, sorted by ray and then by t (ties by triangle), at most max_hits per ray (the nearest): "
+              "(index_ray int64, primitive int64, t, u, v float64, points (m, 3) float64 in the caller's frame, or "
+              "(0, 3) when points=False).")
+                 .c_str())
+        .def("count", &count_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             (std::string(kRaysDoc) + "The number of crossings of each ray: an int64 array.").c_str())
+        .def("contains", &contains, py::arg("points"), py::kw_only(), py::arg("threads") = py::none(),
+             "Whether each point (n, 3) is inside the mesh by the parity of the crossings of a fixed ray from it (exact; "
+             "the same answer on every run and thread count). Meaningful for closed meshes; a point on the surface "
+             "counts as the point moved infinitesimally against containment_direction().");
+    m.def(
+        "containment_direction",
+        [] { return py::make_tuple(kContainmentDirection.x, kContainmentDirection.y, kContainmentDirection.z); },
+        "The fixed direction (float32 values) of the rays RayQueries.contains counts crossings along.");
+}
+
+}  // namespace spacebvh::python

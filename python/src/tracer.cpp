@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: MIT
+// Tracers: a named traversal kernel over a tree, closest and any hits for batches of NumPy rays.
+#include <optional>
+
+#include "bindings.hpp"
+
+namespace spacebvh::python {
+
+py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits) {
+    const py::ssize_t n = py::ssize_t(hits.size());
+    py::array t = new_real_array(frame.float64, {n});
+    py::array_t<float> u(n), v(n);
+    py::array_t<int64_t> primitive(n);
+    void* t_out = t.mutable_data();
+    float* u_out = u.mutable_data();
+    float* v_out = v.mutable_data();
+    int64_t* primitive_out = primitive.mutable_data();
+    // t needs no change of frame: the frame moves origins, not directions.
+    {
+        py::gil_scoped_release unlocked;
+        for (size_t i = 0; i < hits.size(); ++i) {
+            const Hit& hit = hits[i];
+            if (frame.float64)
+                static_cast<double*>(t_out)[i] = hit.t;
+            else
+                static_cast<float*>(t_out)[i] = hit.t;
+            primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
+            u_out[i] = hit.u;
+            v_out[i] = hit.v;
+        }
+    }
+    return py::make_tuple(t, primitive, u, v);
+}
+
+py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers) {
+    py::array_t<bool> result(py::ssize_t(answers.size()));
+    bool* out = result.mutable_data();
+    for (size_t i = 0; i < answers.size(); ++i) out[i] = answers[i] != 0;
+    return result;
+}
+
+namespace {
+
+int threads_for(const PyTracer& self, std::optional<int> threads) { return threads ? *threads : self.threads; }
+
+py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
+                       const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<Hit> hits(rays.size());
+    without_gil(threads, [&] { self.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits)); });
+    return hits_as_arrays(self.scene.frame, hits);
+}
+
+py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
+                           const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<uint8_t> answers(rays.size());
+    without_gil(threads, [&] { self.tracer->occluded(std::span<const Ray>(rays), std::span<uint8_t>(answers)); });
+    return answers_as_array(answers);
+}
+
+}  // namespace
+
+py::class_<PyTracer> bind_tracer(py::module_& m) {
+    m.def("kernels", &kernel_names, "The kernel names Tracer accepts on this CPU.");
+
+    py::class_<PyTracer> tracer(m, "Tracer", "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.");
+    tracer.def(py::init([](const PyBvh& tree, const std::string& kernel, int threads) {
+                 check_threads(threads);
+                 std::unique_ptr<Tracer> chosen;
+                 {
+                     py::gil_scoped_release unlocked;
+                     chosen = make_tracer(kernel, *tree.scene.scene, *tree.bvh);
+                 }
+                 return PyTracer{tree.scene, tree.bvh, std::move(chosen), threads};
+             }),
+             py::arg("bvh"), py::arg("kernel") = "auto", py::arg("threads") = 0,
+             "A tracer over `bvh` with a named kernel (kernels(); 'auto' = the fastest single-ray one). Batch calls "
+             "release the GIL and use `threads` threads (0 = every core) unless they say otherwise.")
+        .def_property_readonly("kernel", [](const PyTracer& self) { return self.tracer->name(); }, "The kernel's name.")
+        .def_property_readonly("memory_bytes", [](const PyTracer& self) { return self.tracer->memory_bytes(); },
+                               "Bytes of the kernel's nodes and leaf triangle data.")
+        .def_property_readonly("scene", [](const PyTracer& self) { return self.scene; }, "The scene traced.")
+        .def_property_readonly("threads", [](const PyTracer& self) { return self.threads; },
+                               "The default thread limit of batch calls (0 = every core).")
+        .def("intersect", &closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             "Closest hits within [tmin, tmax] (numbers, or arrays of one per ray) of rays from origins (k, 3) along "
+             "directions (k, 3); either may be one row (3,) or (1, 3) shared by every ray. Returns arrays t (the "
+             "scene's dtype, inf on a miss), primitive (int64, -1 on a miss), u, v (float32 barycentrics of the "
+             "triangle's second and third corners); Scene.hit_points(primitive, u, v) gives the points.")
+        .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             "Any hit within [tmin, tmax] (numbers, or arrays of one per ray), rays as for intersect(): a bool array.");
+    return tracer;
+}
+
+}  // namespace spacebvh::python

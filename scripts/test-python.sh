@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# The Python package's test: `pip install .` into a fresh virtual environment (build/venv), import
+# it there, then run python/tests with pytest (its summary line is the last line of the output).
+# scripts/test.sh runs it after the C++ suite; run alone it builds the C++ itself (through pip).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+venv="$PWD/build/venv"
+rm -rf "$venv" build-pip
+mkdir -p build
+python3 -m venv "$venv"
+# The C++ that scripts/build.sh compiled is compiled again here with the same flags: ccache answers
+# it. The build folder sits beside ./build so ccache's base_dir rewriting sees the same relative paths.
+if command -v ccache >/dev/null; then export CMAKE_CXX_COMPILER_LAUNCHER=ccache; fi
+start=$SECONDS
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests]"
+echo "pip install . took $((SECONDS - start)) s"
+rm -rf build-pip
+# Outside the repository, so that only the installed package can be imported.
+(cd / && "$venv/bin/python" -c "import spacebvh; print('import spacebvh:', spacebvh.__version__, spacebvh.__file__)")
+# Exit status 5 (no tests collected) fails this script too: an empty run must not read as a pass.
+"$venv/bin/python" -m pytest -ra python/tests

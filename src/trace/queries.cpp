@@ -1,0 +1,800 @@
+// SPDX-License-Identifier: MIT
+// Exact multi-hit queries (queries.hpp, docs/queries.md).
+//
+// Decision for one ray and one triangle, in three stages:
+//  1. the float edge functions of the watertight test with their error bound (triangle_pack.hpp):
+//     most triangles are clearly missed, and a clear crossing of the interior needs nothing more;
+//  2. otherwise the sign of each edge function, exactly (filtered double, then an exact expansion);
+//     an edge function that is exactly zero gets the sign it takes when the ray's origin moves by
+//     e*x + e^2*y + e^3*z for an infinitesimal e (simulation of simplicity): the sign of the first
+//     nonzero component of dir x (q - p). One perturbation for the whole query, so the answers are
+//     those of one real ray passing beside every edge and vertex;
+//  3. the distance: t in [tmin, tmax] decided exactly (closed interval), t itself in double.
+#include "spacebvh/queries.hpp"
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "spacebvh/error.hpp"
+#include "spacebvh/trace.hpp"
+#include "trace/traversal_common.hpp"
+#include "trace/triangle_pack.hpp"
+#include "trace/wide_layout.hpp"
+#include "trace/watertight_triangle.hpp"
+
+namespace spacebvh {
+
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Exact signs of polynomials in float inputs. A product of two floats is exact in double; a third
+// factor makes a two-term expansion (fma); the sum is kept as a nonoverlapping expansion (Shewchuk,
+// "Adaptive Precision Floating-Point Arithmetic", 1997), whose sign is that of its largest term.
+// Exact over the whole float range (no overflow or harmful underflow for products of up to four
+// floats). The build disables FMA contraction, which the two-sum below relies on.
+
+class Expansion {
+public:
+    void add(double x) {
+        if (x == 0.0) return;
+        double q = x;
+        int m = 0;
+        for (int i = 0; i < size_; ++i) {
+            const double s = q + terms_[i];
+            const double bv = s - q;
+            const double av = s - bv;
+            const double e = (q - av) + (terms_[i] - bv);
+            if (e != 0.0) terms_[m++] = e;
+            q = s;
+        }
+        if (q != 0.0) terms_[m++] = q;
+        size_ = m;
+    }
+    void add_product(double a, double b) {  // a * b exactly
+        const double p = a * b;
+        add(std::fma(a, b, -p));
+        add(p);
+    }
+    int sign() const { return size_ == 0 ? 0 : (terms_[size_ - 1] > 0.0 ? 1 : -1); }
+
+private:
+    // Every add() grows the expansion by at most one term; the longest sum below has 84 terms.
+    double terms_[96];
+    int size_ = 0;
+};
+
+// s * a.(b x c), added exactly.
+void add_determinant(Expansion& e, double s, Vec3 a, Vec3 b, Vec3 c) {
+    auto term = [&](float x, float y, float z, double sign) { e.add_product(sign * s * double(x), double(y) * double(z)); };
+    term(a.x, b.y, c.z, 1.0);
+    term(a.x, b.z, c.y, -1.0);
+    term(a.y, b.z, c.x, 1.0);
+    term(a.y, b.x, c.z, -1.0);
+    term(a.z, b.x, c.y, 1.0);
+    term(a.z, b.y, c.x, -1.0);
+}
+
+// s * tau * a.(b x c), added exactly (products of four floats: two exact doubles, then a two-product).
+void add_scaled_determinant(Expansion& e, double s, float tau, Vec3 a, Vec3 b, Vec3 c) {
+    auto term = [&](float x, float y, float z, double sign) {
+        e.add_product(sign * s * double(tau) * double(x), double(y) * double(z));
+    };
+    term(a.x, b.y, c.z, 1.0);
+    term(a.x, b.z, c.y, -1.0);
+    term(a.y, b.z, c.x, 1.0);
+    term(a.y, b.x, c.z, -1.0);
+    term(a.z, b.x, c.y, 1.0);
+    term(a.z, b.y, c.x, -1.0);
+}
+
+// Edge function of the directed edge p -> q: dir . ((p - o) x (q - o)) = det(d, p, q) + det(d, q, o)
+// + det(d, o, p), exactly.
+int edge_sign_exact(const Ray& ray, Vec3 p, Vec3 q) {
+    Expansion e;
+    add_determinant(e, 1.0, ray.dir, p, q);
+    add_determinant(e, 1.0, ray.dir, q, ray.org);
+    add_determinant(e, 1.0, ray.dir, ray.org, p);
+    return e.sign();
+}
+
+// The sign the edge function takes under the perturbation: first nonzero component of d x (q - p).
+int perturbation_sign(const Vec3& d, Vec3 p, Vec3 q) {
+    for (int axis = 0; axis < 3; ++axis) {
+        const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+        // (d x (q - p))[axis] = d[a1] (q[a2] - p[a2]) - d[a2] (q[a1] - p[a1])
+        Expansion e;
+        e.add(double(d[a1]) * double(q[a2]));
+        e.add(-double(d[a1]) * double(p[a2]));
+        e.add(-double(d[a2]) * double(q[a1]));
+        e.add(double(d[a2]) * double(p[a1]));
+        if (const int s = e.sign()) return s;
+    }
+    return 0;  // the edge is parallel to the ray: its triangle is seen edge-on and never hit
+}
+
+struct DVec {
+    double x, y, z;
+};
+inline DVec dsub(Vec3 a, Vec3 b) { return {double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z}; }
+
+// Sign of the edge function p -> q under the perturbation; never 0 unless the edge is parallel to dir.
+int perturbed_edge_sign(const Ray& ray, Vec3 p, Vec3 q) {
+    const DVec a = dsub(p, ray.org), b = dsub(q, ray.org);
+    const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
+    const double value = dx * (a.y * b.z - a.z * b.y) + dy * (a.z * b.x - a.x * b.z) + dz * (a.x * b.y - a.y * b.x);
+    const double magnitude = std::fabs(dx) * (std::fabs(a.y * b.z) + std::fabs(a.z * b.y)) +
+                             std::fabs(dy) * (std::fabs(a.z * b.x) + std::fabs(a.x * b.z)) +
+                             std::fabs(dz) * (std::fabs(a.x * b.y) + std::fabs(a.y * b.x));
+    // Rounding of the differences (one each), products (two levels) and sums (three): far below 16 ulp.
+    if (std::fabs(value) > 16.0 * 0x1p-53 * magnitude + 0x1p-1000) return value > 0 ? 1 : -1;
+    if (const int s = edge_sign_exact(ray, p, q)) return s;
+    return perturbation_sign(ray.dir, p, q);
+}
+
+// Whether the perturbed ray passes through the triangle's interior (stage 2).
+bool crosses_perturbed(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+    const int su = perturbed_edge_sign(ray, v1, v2);
+    if (su == 0) return false;
+    const int sv = perturbed_edge_sign(ray, v2, v0);
+    if (sv != su) return false;
+    return perturbed_edge_sign(ray, v0, v1) == su;
+}
+
+// Exact sign of N - tau * D, where t = N / D is the plane crossing: N = det(v0 - o, v1 - o, v2 - o),
+// D = (v1 - v0) x (v2 - v0) . dir.
+int crossing_minus_sign_exact(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2, float tau) {
+    const Vec3 o = ray.org, d = ray.dir;
+    Expansion e;
+    add_determinant(e, 1.0, v0, v1, v2);
+    add_determinant(e, -1.0, o, v1, v2);
+    add_determinant(e, -1.0, v0, o, v2);
+    add_determinant(e, -1.0, v0, v1, o);
+    if (tau != 0.0f) {
+        add_scaled_determinant(e, -1.0, tau, v1, v2, d);
+        add_scaled_determinant(e, -1.0, tau, v0, v1, d);
+        add_scaled_determinant(e, -1.0, tau, v2, v0, d);
+    }
+    return e.sign();
+}
+
+int denominator_sign_exact(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+    Expansion e;
+    add_determinant(e, 1.0, v1, v2, ray.dir);
+    add_determinant(e, 1.0, v0, v1, ray.dir);
+    add_determinant(e, 1.0, v2, v0, ray.dir);
+    return e.sign();
+}
+
+// Stage 3: the plane crossing t = N / D in double, and whether tmin <= t <= tmax, exactly. The triangle
+// is known to be crossed transversally, so D != 0 in exact arithmetic.
+bool crossing_in_range(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2, double tmax, double& t) {
+    const DVec e1 = dsub(v1, v0), e2 = dsub(v2, v0), p = dsub(v0, ray.org);
+    const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
+    const double nx = e1.y * e2.z - e1.z * e2.y, ny = e1.z * e2.x - e1.x * e2.z, nz = e1.x * e2.y - e1.y * e2.x;
+    const double mx = std::fabs(e1.y * e2.z) + std::fabs(e1.z * e2.y), my = std::fabs(e1.z * e2.x) + std::fabs(e1.x * e2.z),
+                 mz = std::fabs(e1.x * e2.y) + std::fabs(e1.y * e2.x);
+    const double numerator = nx * p.x + ny * p.y + nz * p.z;
+    const double denominator = nx * dx + ny * dy + nz * dz;
+    // Error bounds: a few roundings per level, each relative to the magnitudes involved.
+    constexpr double kRelative = 32.0 * 0x1p-53;
+    const double numerator_error = kRelative * (mx * std::fabs(p.x) + my * std::fabs(p.y) + mz * std::fabs(p.z)) + 0x1p-1000;
+    const double denominator_error = kRelative * (mx * std::fabs(dx) + my * std::fabs(dy) + mz * std::fabs(dz)) + 0x1p-1000;
+
+    int denominator_sign;
+    if (std::fabs(denominator) > denominator_error)
+        denominator_sign = denominator > 0 ? 1 : -1;
+    else
+        denominator_sign = denominator_sign_exact(ray, v0, v1, v2);
+    if (denominator_sign == 0) return false;
+
+    // sign(t - tau) = sign(N - tau D) * sign(D)
+    auto at_or_beyond = [&](double tau) {  // sign of t - tau
+        const double value = numerator - tau * denominator;
+        const double error = numerator_error + std::fabs(tau) * denominator_error +
+                             4.0 * 0x1p-53 * (std::fabs(numerator) + std::fabs(tau * denominator));
+        const int s = std::fabs(value) > error ? (value > 0 ? 1 : -1)
+                                                : crossing_minus_sign_exact(ray, v0, v1, v2, float(tau));
+        return s * denominator_sign;
+    };
+    if (std::isfinite(ray.tmin) && at_or_beyond(ray.tmin) < 0) return false;
+    if (std::isfinite(tmax)) {
+        if (tmax == double(ray.tmax)) {
+            if (at_or_beyond(ray.tmax) > 0) return false;
+        } else {
+            // A shrunk bound (first hit): the double t of an earlier crossing; compare in double.
+            if (!(numerator / denominator <= tmax)) return false;
+        }
+    }
+    t = numerator / denominator;
+    return true;
+}
+
+// Barycentrics and point of a crossing, from the double edge functions.
+QueryHit make_hit(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2, uint32_t id, double t) {
+    const DVec a = dsub(v0, ray.org), b = dsub(v1, ray.org), c = dsub(v2, ray.org);
+    const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
+    auto edge = [&](const DVec& p, const DVec& q) {
+        return dx * (p.y * q.z - p.z * q.y) + dy * (p.z * q.x - p.x * q.z) + dz * (p.x * q.y - p.y * q.x);
+    };
+    const double fu = edge(b, c), fv = edge(c, a), fw = edge(a, b);
+    const double sum = fu + fv + fw;
+    QueryHit hit;
+    hit.t = t;
+    hit.primitive = id;
+    hit.u = sum != 0.0 ? fv / sum : 0.0;
+    hit.v = sum != 0.0 ? fw / sum : 0.0;
+    const double w0 = 1.0 - hit.u - hit.v;
+    for (int axis = 0; axis < 3; ++axis)
+        hit.point[size_t(axis)] = w0 * double(v0[axis]) + hit.u * double(v1[axis]) + hit.v * double(v2[axis]);
+    return hit;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The layout: binary nodes with both child boxes side by side, leaves as packs of four triangles.
+
+constexpr uint32_t kEmptySlot = 0xFFFFFFFFu;
+
+struct alignas(64) QueryNode {
+    float planes[3][4];  // per axis: lo of child 0, lo of child 1, hi of child 0, hi of child 1
+    uint32_t child[2];   // inner child: node index; leaf: first pack
+    uint32_t count[2];   // 0: inner child; kEmptySlot: no child; else the leaf's lanes
+};
+
+typedef double Double4 __attribute__((vector_size(32)));
+typedef float Float4 __attribute__((vector_size(16)));
+
+// Per-ray constants of the two-box slab test, in double: t = (plane - o) * inv + bias. An axis the ray
+// does not move along gets a huge inverse and a bias that opens its slab to +-2^300 when the origin is
+// inside (including on a plane), and keeps it shut otherwise: no 0 * inf.
+struct SlabRay {
+    Double4 org[3], inv[3], bias[3];
+    explicit SlabRay(const Ray& ray) {
+        for (int a = 0; a < 3; ++a) {
+            const double d = ray.dir[a];
+            const bool parallel = d == 0.0;
+            const double o = ray.org[a];
+            org[a] = Double4{o, o, o, o};
+            const double inverse = parallel ? 0x1p600 : 1.0 / d;
+            inv[a] = Double4{inverse, inverse, inverse, inverse};
+            const double b = parallel ? 0x1p300 : 0.0;
+            bias[a] = Double4{-b, -b, b, b};
+        }
+    }
+};
+
+// The relative widening of the slab distances: the difference, reciprocal and product each round once
+// (relative 2^-53); 1e-15 is over 9 of those.
+constexpr double kWiden = 1e-15;
+
+// Which of the node's two children the ray enters within [tmin, tmax] (bit i: child i), and their entry
+// distances.
+inline unsigned enter_children(const QueryNode& node, const SlabRay& s, double tmin, double tmax, double near_out[2]) {
+    // Clamped to +-2^400: a crossing inside a box lies within the box's slab on an axis the ray moves
+    // along, so |t| <= 2^129 / 2^-149 there; a parallel axis whose slab misses the origin gives
+    // distances beyond 2^450 and is culled even when tmax is infinite.
+    const double low = std::max(tmin, -0x1p400), high = std::min(tmax, 0x1p400);
+    Double4 near = {low, low, low, low}, far = {high, high, high, high};
+    for (int a = 0; a < 3; ++a) {
+        Float4 pf;
+        std::memcpy(&pf, node.planes[a], sizeof pf);
+        const Double4 p = __builtin_convertvector(pf, Double4);
+        const Double4 t = (p - s.org[a]) * s.inv[a] + s.bias[a];
+        const Double4 swapped = __builtin_shufflevector(t, t, 2, 3, 0, 1);
+        const Double4 lo = t < swapped ? t : swapped;
+        const Double4 hi = t < swapped ? swapped : t;
+        near = near > lo ? near : lo;
+        far = far < hi ? far : hi;
+    }
+    unsigned mask = 0;
+    for (int i = 0; i < 2; ++i) {
+        const double n = near[i] - std::fabs(near[i]) * kWiden, f = far[i] + std::fabs(far[i]) * kWiden;
+        if (node.count[i] != kEmptySlot && n <= f) mask |= 1u << i;
+        near_out[i] = n;
+    }
+    return mask;
+}
+
+constexpr int kStackSize = 2048;
+
+}  // namespace
+
+struct RayQueries::Layout {
+    std::vector<QueryNode> nodes;
+    trace::TrianglePacks packs;
+    size_t triangle_count = 0;
+#if defined(__AVX2__) && defined(__FMA__)
+    // The same tree collapsed to eight-wide nodes (wide_layout.hpp): the walk of every crossing visits
+    // a third of the nodes it visits in the binary layout. Rays with tmin >= 0 only (FusedSlabs).
+    trace::WideLayout<8> wide;
+    bool has_wide = false;
+#endif
+};
+
+namespace {
+
+using Layout = RayQueries::Layout;
+
+// Appends the leaf's live triangles as packs of its own; returns {first pack, lanes} or an empty slot.
+std::pair<uint32_t, uint32_t> add_leaf(Layout& layout, std::span<const Triangle> triangles, const Bvh& bvh, const BvhNode& leaf) {
+    std::vector<uint32_t> live;
+    for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
+        const uint32_t id = bvh.primitives[i];
+        if (id >= triangles.size())
+            throw Error("queries: the tree refers to triangle " + std::to_string(id) + " of " + std::to_string(triangles.size()));
+        if (!triangles[id].is_degenerate()) live.push_back(id);
+    }
+    if (live.empty()) return {0, kEmptySlot};
+    const uint32_t first = uint32_t(layout.packs.size());
+    for (size_t k = 0; k < live.size(); ++k) {
+        if (k % 4 == 0) layout.packs.emplace_back();
+        trace::TrianglePack& pack = layout.packs.back();  // value-initialised: unused lanes are zero
+        const Triangle& tri = triangles[live[k]];
+        const int lane = int(k % 4);
+        for (int v = 0; v < 3; ++v)
+            for (int a = 0; a < 3; ++a) pack.vertex[v][a][lane] = tri.vertex(v)[a];
+        pack.primitive[lane] = live[k];
+    }
+    return {first, uint32_t(live.size())};
+}
+
+void set_slot(QueryNode& node, int slot, const AABB& box, uint32_t child, uint32_t count) {
+    for (int a = 0; a < 3; ++a) {
+        node.planes[a][slot] = box.lo[a];
+        node.planes[a][slot + 2] = box.hi[a];
+    }
+    node.child[slot] = child;
+    node.count[slot] = count;
+}
+
+// Lays out the subtree under bvh node `index` as the children of a new query node; returns its index.
+uint32_t add_node(Layout& layout, std::span<const Triangle> triangles, const Bvh& bvh, uint32_t index, int depth) {
+    if (depth > kStackSize / 2) throw Error("queries: the tree is deeper than " + std::to_string(kStackSize / 2) + " levels");
+    const uint32_t at = uint32_t(layout.nodes.size());
+    layout.nodes.emplace_back();
+    const BvhNode& node = bvh.nodes[index];
+    const uint32_t children[2] = {node.first, node.first + 1};
+    for (int slot = 0; slot < 2; ++slot) {
+        if (children[slot] >= bvh.nodes.size()) throw Error("queries: a tree node refers to a missing child");
+        const BvhNode& child = bvh.nodes[children[slot]];
+        if (child.is_leaf()) {
+            const auto [first, lanes] = add_leaf(layout, triangles, bvh, child);
+            set_slot(layout.nodes[at], slot, child.bounds, first, lanes);
+        } else {
+            const uint32_t inner = add_node(layout, triangles, bvh, children[slot], depth + 1);
+            set_slot(layout.nodes[at], slot, child.bounds, inner, 0);
+        }
+    }
+    return at;
+}
+
+struct RayContext {
+    const Ray& ray;
+    SlabRay slabs;
+    trace::WatertightRay shear;
+    trace::PackRay pack_ray;
+    explicit RayContext(const Ray& r) : ray(r), slabs(r), shear(r), pack_ray(shear) {}
+};
+
+// Tests a leaf's lanes; calls on_crossing(id, v0, v1, v2) for each triangle the perturbed ray crosses
+// transversally (the distance is left to the caller). Returns true when on_crossing asks to stop.
+template <class OnCrossing>
+inline bool visit_leaf(const trace::TrianglePack* packs, const RayContext& r, uint32_t first, uint32_t count, OnCrossing&& on_crossing) {
+    for (uint32_t p = 0; p * 4 < count; ++p) {
+        const trace::TrianglePack& pack = packs[first + p];
+        const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
+        trace::PackEdges edges;
+        trace::pack_edges(pack, r.pack_ray, edges);
+        unsigned candidates = unsigned(~edges.outside) & ((1u << lanes) - 1);
+        while (candidates) {
+            const int lane = __builtin_ctz(candidates);
+            candidates &= candidates - 1;
+            Vec3 v[3];
+            trace::pack_triangle(pack, lane, v);
+            if (!((edges.inside >> lane) & 1) && !crosses_perturbed(r.ray, v[0], v[1], v[2])) continue;
+            if (on_crossing(pack.primitive[lane], v[0], v[1], v[2])) return true;
+        }
+    }
+    return false;
+}
+
+#if defined(__AVX2__) && defined(__FMA__)
+// Eight-wide node test with the kernels' fused slab constants (traversal_common.hpp, FusedSlabs: why it
+// is conservative, and why a NaN from an axis the ray does not move along leaves the bounds alone by
+// the operand order of min and max). Empty slots hold empty boxes, which no ray enters.
+struct WideRay {
+    __m256 entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];
+    int entry_plane[3], exit_plane[3];
+    explicit WideRay(const Ray& ray) {
+        const trace::FusedSlabs slabs(ray);
+        for (int axis = 0; axis < 3; ++axis) {
+            entry_scale[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.entry_scale, axis));
+            entry_offset[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.entry_offset, axis));
+            exit_scale[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.exit_scale, axis));
+            exit_offset[axis] = _mm256_set1_ps(trace::FusedSlabs::lane(slabs.exit_offset, axis));
+            const bool negative = (slabs.negative >> axis) & 1u;
+            entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
+            exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
+        }
+    }
+};
+
+inline unsigned wide_children(const trace::WideNode<8>& node, const WideRay& ray, float tmin, float tmax) {
+    __m256 near = _mm256_set1_ps(tmin), far = _mm256_set1_ps(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const __m256 t_entry = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
+        const __m256 t_exit = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        near = _mm256_max_ps(t_entry, near);
+        far = _mm256_min_ps(t_exit, far);
+    }
+    return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, far, _CMP_LE_OQ)));
+}
+
+// Visits the leaves of the boxes the ray enters within [tmin, tmax]; tmax may shrink as it goes (the
+// first crossing narrows it to a float at or above the best t so far).
+template <class OnLeaf>
+inline void traverse_wide(const trace::WideLayout<8>& wide, const Ray& ray, const float& tmax, OnLeaf&& on_leaf) {
+    const WideRay boxes(ray);
+    uint32_t stack[kStackSize * 4];  // at most seven pushes per level
+    int top = 0;
+    stack[top++] = 0;
+    const trace::TrianglePack* packs = wide.packs.data();
+    while (top > 0) {
+        const trace::WideNode<8>& node = wide.nodes[stack[--top]];
+        const unsigned mask = wide_children(node, boxes, ray.tmin, tmax);
+        unsigned leaves = 0;
+        for (unsigned m = mask; m; m &= m - 1) {
+            const int slot = __builtin_ctz(m);
+            if (node.count[slot] == 0) {
+                __builtin_prefetch(&wide.nodes[node.child[slot]]);
+                stack[top++] = node.child[slot];
+            } else {
+                __builtin_prefetch(&packs[node.child[slot]]);
+                leaves |= 1u << slot;
+            }
+        }
+        for (; leaves; leaves &= leaves - 1) {
+            const int slot = __builtin_ctz(leaves);
+            if (on_leaf(packs, node.child[slot], node.count[slot])) return;
+        }
+    }
+}
+#endif
+
+// Visits every leaf the ray may cross within [tmin, tmax]. on_leaf(packs, first, count) returns true
+// to stop. A leaf may hold triangles of its neighbours too (LeafPacker): they are real triangles,
+// tested like the others, and the callers drop the repeats.
+template <class OnLeaf>
+inline void traverse_all(const Layout& layout, const RayContext& r, OnLeaf&& on_leaf) {
+#if defined(__AVX2__) && defined(__FMA__)
+    if (layout.has_wide && r.ray.tmin >= 0.0f) {
+        traverse_wide(layout.wide, r.ray, r.ray.tmax, on_leaf);
+        return;
+    }
+#endif
+    if (layout.nodes.empty()) return;
+    uint32_t stack[kStackSize];
+    int top = 0;
+    stack[top++] = 0;
+    const double tmin = r.ray.tmin, tmax = r.ray.tmax;
+    while (top > 0) {
+        const QueryNode& node = layout.nodes[stack[--top]];
+        double near[2];
+        const unsigned mask = enter_children(node, r.slabs, tmin, tmax, near);
+        // Inner children first, fetched ahead while the leaves are tested (the walk of an incoherent
+        // ray waits on memory more than on arithmetic).
+        unsigned leaves = 0;
+        for (int slot = 0; slot < 2; ++slot) {
+            if (!((mask >> slot) & 1)) continue;
+            if (node.count[slot] == 0) {
+                __builtin_prefetch(&layout.nodes[node.child[slot]]);
+                stack[top++] = node.child[slot];
+            } else {
+                __builtin_prefetch(&layout.packs[node.child[slot]]);
+                leaves |= 1u << slot;
+            }
+        }
+        while (leaves) {
+            const int slot = __builtin_ctz(leaves);
+            leaves &= leaves - 1;
+            if (on_leaf(layout.packs.data(), node.child[slot], node.count[slot])) return;
+        }
+    }
+}
+
+bool valid_ray(const Ray& ray) {
+    return is_finite(ray.org) && is_finite(ray.dir) && !(ray.dir.x == 0.0f && ray.dir.y == 0.0f && ray.dir.z == 0.0f) &&
+           !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
+}
+
+void check_ray(const Ray& ray) {
+    if (!valid_ray(ray))
+        throw Error("queries: a ray needs a finite origin, a finite nonzero direction and tmin, tmax that are not NaN");
+}
+
+// Collects the crossings (deduplicated: spatial splits put a triangle in several leaves), sorted.
+void collect_hits(const Layout& layout, const Ray& ray, std::vector<QueryHit>& out, size_t max_hits) {
+    out.clear();
+    if (max_hits == 0) return;
+    const RayContext r(ray);
+    const double tmax = ray.tmax;
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+            double t;
+            if (crossing_in_range(ray, v0, v1, v2, tmax, t)) out.push_back(make_hit(ray, v0, v1, v2, id, t));
+            return false;
+        });
+    });
+    std::sort(out.begin(), out.end(), [](const QueryHit& a, const QueryHit& b) {
+        return a.t < b.t || (a.t == b.t && a.primitive < b.primitive);
+    });
+    out.erase(std::unique(out.begin(), out.end(), [](const QueryHit& a, const QueryHit& b) { return a.primitive == b.primitive; }),
+              out.end());
+    if (out.size() > max_hits) out.resize(max_hits);
+}
+
+uint32_t count_crossings(const Layout& layout, const Ray& ray, std::vector<uint32_t>& scratch) {
+    scratch.clear();
+    const RayContext r(ray);
+    const double tmax = ray.tmax;
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+            double t;
+            if (crossing_in_range(ray, v0, v1, v2, tmax, t)) scratch.push_back(id);
+            return false;
+        });
+    });
+    if (scratch.size() > 1) {
+        std::sort(scratch.begin(), scratch.end());
+        scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+    }
+    return uint32_t(scratch.size());
+}
+
+// The nearest crossing found so far. Before the first, the bound is the ray's own tmax (decided
+// exactly); after it, the best t (compared in double: the t of every crossing is computed alike).
+struct Nearest {
+    const Ray& ray;
+    double t;
+    bool found = false;
+    uint32_t id = kInvalidIndex;
+    Vec3 vertex[3];
+
+    explicit Nearest(const Ray& r) : ray(r), t(r.tmax) {}
+    // Returns true when the triangle's crossing is the new nearest.
+    bool offer(uint32_t candidate, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+        double candidate_t;
+        if (!crossing_in_range(ray, v0, v1, v2, found ? t : double(ray.tmax), candidate_t)) return false;
+        if (found && (candidate_t > t || (candidate_t == t && candidate >= id))) return false;
+        found = true;
+        t = candidate_t;
+        id = candidate;
+        vertex[0] = v0, vertex[1] = v1, vertex[2] = v2;
+        return true;
+    }
+    std::optional<QueryHit> hit() const {
+        if (!found) return std::nullopt;
+        return make_hit(ray, vertex[0], vertex[1], vertex[2], id, t);
+    }
+};
+
+std::optional<QueryHit> nearest_crossing(const Layout& layout, const Ray& ray) {
+    if (layout.nodes.empty()) return std::nullopt;
+    const RayContext r(ray);
+    Nearest nearest(ray);
+#if defined(__AVX2__) && defined(__FMA__)
+    if (layout.has_wide && ray.tmin >= 0.0f) {
+        float box_tmax = ray.tmax;
+        traverse_wide(layout.wide, ray, box_tmax, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+            visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+                // A float bound at or above t: boxes are entered conservatively up to it.
+                if (nearest.offer(id, v0, v1, v2)) box_tmax = std::nextafter(float(nearest.t), kInfinity);
+                return false;
+            });
+            return false;
+        });
+        return nearest.hit();
+    }
+#endif
+    struct Entry {
+        uint32_t node;
+        double near;
+    };
+    Entry stack[kStackSize];
+    int top = 0;
+    stack[top++] = {0, -std::numeric_limits<double>::infinity()};
+    while (top > 0) {
+        const Entry entry = stack[--top];
+        if (entry.near > nearest.t) continue;
+        const QueryNode& node = layout.nodes[entry.node];
+        double near[2];
+        const unsigned mask = enter_children(node, r.slabs, ray.tmin, nearest.t, near);
+        if (!mask) continue;
+        // Nearer child last on the stack (visited first); leaves are tested at once.
+        int order[2] = {0, 1};
+        if (mask == 3 && near[1] < near[0]) std::swap(order[0], order[1]);
+        for (int k = 1; k >= 0; --k) {
+            const int slot = order[k];
+            if (!((mask >> slot) & 1) || node.count[slot] != 0) continue;
+            __builtin_prefetch(&layout.nodes[node.child[slot]]);
+            stack[top++] = {node.child[slot], near[slot]};
+        }
+        for (int k = 0; k < 2; ++k) {
+            const int slot = order[k];
+            if (!((mask >> slot) & 1) || node.count[slot] == 0) continue;
+            visit_leaf(layout.packs.data(), r, node.child[slot], node.count[slot],
+                       [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+                           nearest.offer(id, v0, v1, v2);
+                           return false;
+                       });
+        }
+    }
+    return nearest.hit();
+}
+
+bool any_crossing(const Layout& layout, const Ray& ray) {
+    const RayContext r(ray);
+    bool found = false;
+    const double tmax = ray.tmax;
+    traverse_all(layout, r, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+        return visit_leaf(packs, r, first, count, [&](uint32_t, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+            double t;
+            found = crossing_in_range(ray, v0, v1, v2, tmax, t);
+            return found;
+        });
+    });
+    return found;
+}
+
+Ray containment_ray(Vec3 point) {
+    if (!is_finite(point)) throw Error("queries: contains() needs a finite point");
+    return Ray{point, kContainmentDirection, 0.0f, kInfinity};
+}
+
+// A fixed grain: the work split does not depend on the thread count (and answers are per ray anyway).
+constexpr size_t kGrain = 256;
+
+template <class Body>
+void for_chunks(size_t n, Body&& body) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& range) {
+        body(range.begin(), range.end());
+    }, tbb::simple_partitioner());
+}
+
+void check_sizes(size_t a, size_t b, const char* what) {
+    if (a != b) throw Error(std::string("queries: ") + what + ": " + std::to_string(a) + " inputs but room for " + std::to_string(b) + " answers");
+}
+
+
+}  // namespace
+
+std::optional<QueryHit> intersect_triangle_perturbed(const Ray& ray, const Triangle& triangle, uint32_t id) {
+    check_ray(ray);
+    if (triangle.is_degenerate()) return std::nullopt;
+    if (!crosses_perturbed(ray, triangle.v0, triangle.v1, triangle.v2)) return std::nullopt;
+    double t;
+    if (!crossing_in_range(ray, triangle.v0, triangle.v1, triangle.v2, ray.tmax, t)) return std::nullopt;
+    return make_hit(ray, triangle.v0, triangle.v1, triangle.v2, id, t);
+}
+
+RayQueries::RayQueries(std::span<const Triangle> triangles, const Bvh& bvh) : layout_(std::make_unique<Layout>()) {
+    layout_->triangle_count = triangles.size();
+    for (size_t i = 0; i < triangles.size(); ++i)
+        if (!is_finite(triangles[i].v0) || !is_finite(triangles[i].v1) || !is_finite(triangles[i].v2))
+            throw Error("queries: triangle " + std::to_string(i) + " has a vertex that is not finite");
+    if (bvh.empty() || triangles.empty()) return;
+    const BvhNode& root = bvh.root();
+    if (root.is_leaf()) {
+        layout_->nodes.emplace_back();
+        const auto [first, lanes] = add_leaf(*layout_, triangles, bvh, root);
+        set_slot(layout_->nodes[0], 0, root.bounds, first, lanes);
+        set_slot(layout_->nodes[0], 1, AABB{}, 0, kEmptySlot);
+    } else {
+        add_node(*layout_, triangles, bvh, 0, 0);
+    }
+#if defined(__AVX2__) && defined(__FMA__)
+    layout_->wide = trace::collapse_to_wide<8>(triangles, bvh, WideCollapse::sah_optimal);
+    layout_->has_wide = !layout_->wide.nodes.empty();
+#endif
+}
+
+RayQueries::~RayQueries() = default;
+RayQueries::RayQueries(RayQueries&&) noexcept = default;
+RayQueries& RayQueries::operator=(RayQueries&&) noexcept = default;
+
+size_t RayQueries::triangle_count() const { return layout_->triangle_count; }
+
+std::optional<QueryHit> RayQueries::first_hit(const Ray& ray) const {
+    check_ray(ray);
+    return nearest_crossing(*layout_, ray);
+}
+
+bool RayQueries::any_hit(const Ray& ray) const {
+    check_ray(ray);
+    return any_crossing(*layout_, ray);
+}
+
+void RayQueries::all_hits(const Ray& ray, std::vector<QueryHit>& out, size_t max_hits) const {
+    check_ray(ray);
+    collect_hits(*layout_, ray, out, max_hits);
+}
+
+uint32_t RayQueries::count_hits(const Ray& ray) const {
+    check_ray(ray);
+    std::vector<uint32_t> scratch;
+    return count_crossings(*layout_, ray, scratch);
+}
+
+bool RayQueries::contains(Vec3 point) const {
+    std::vector<uint32_t> scratch;
+    return count_crossings(*layout_, containment_ray(point), scratch) % 2 == 1;
+}
+
+void RayQueries::first_hits(std::span<const Ray> rays, std::span<QueryHit> out) const {
+    check_sizes(rays.size(), out.size(), "first_hits");
+    for (const Ray& ray : rays) check_ray(ray);
+    for_chunks(rays.size(), [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out[i] = nearest_crossing(*layout_, rays[i]).value_or(QueryHit{});
+    });
+}
+
+void RayQueries::any_hits(std::span<const Ray> rays, std::span<uint8_t> out) const {
+    check_sizes(rays.size(), out.size(), "any_hits");
+    for (const Ray& ray : rays) check_ray(ray);
+    for_chunks(rays.size(), [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out[i] = any_crossing(*layout_, rays[i]) ? 1 : 0;
+    });
+}
+
+HitLists RayQueries::all_hits(std::span<const Ray> rays, size_t max_hits) const {
+    for (const Ray& ray : rays) check_ray(ray);
+    const size_t chunks = (rays.size() + kGrain - 1) / kGrain;
+    std::vector<std::vector<QueryHit>> chunk_hits(chunks);
+    HitLists lists;
+    lists.offsets.assign(rays.size() + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
+        std::vector<QueryHit> scratch;
+        for (size_t c = range.begin(); c != range.end(); ++c) {
+            std::vector<QueryHit>& hits = chunk_hits[c];
+            const size_t end = std::min(rays.size(), (c + 1) * kGrain);
+            for (size_t i = c * kGrain; i < end; ++i) {
+                collect_hits(*layout_, rays[i], scratch, max_hits);
+                lists.offsets[i + 1] = scratch.size();
+                hits.insert(hits.end(), scratch.begin(), scratch.end());
+            }
+        }
+    });
+    for (size_t i = 0; i < rays.size(); ++i) lists.offsets[i + 1] += lists.offsets[i];
+    lists.hits.resize(lists.offsets.back());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t c = range.begin(); c != range.end(); ++c)
+            std::copy(chunk_hits[c].begin(), chunk_hits[c].end(), lists.hits.begin() + ptrdiff_t(lists.offsets[c * kGrain]));
+    });
+    return lists;
+}
+
+void RayQueries::count_hits(std::span<const Ray> rays, std::span<uint32_t> out) const {
+    check_sizes(rays.size(), out.size(), "count_hits");
+    for (const Ray& ray : rays) check_ray(ray);
+    for_chunks(rays.size(), [&](size_t begin, size_t end) {
+        std::vector<uint32_t> scratch;
+        for (size_t i = begin; i < end; ++i) out[i] = count_crossings(*layout_, rays[i], scratch);
+    });
+}
+
+void RayQueries::contains(std::span<const Vec3> points, std::span<uint8_t> out) const {
+    check_sizes(points.size(), out.size(), "contains");
+    for (const Vec3& p : points) containment_ray(p);
+    for_chunks(points.size(), [&](size_t begin, size_t end) {
+        std::vector<uint32_t> scratch;
+        for (size_t i = begin; i < end; ++i) out[i] = count_crossings(*layout_, containment_ray(points[i]), scratch) % 2;
+    });
+}
+
+}  // namespace spacebvh
