@@ -19,11 +19,11 @@ PROFILES = {
     "quick": {"random": 5000, "width": 32, "height": 32, "runs": 3, "build_runs": 3, "optimum_nodes": 40,
               "optimum_max_refs": 12, "heat_size": 64, "limit_grid": 20000, "limit_full": 20000,
               "limit_lookahead": 20000, "limit_build": 20000, "limit_overlap": 10**9, "skip_rotated_overlap": True,
-              "co_values": ("0", "1", "inf"), "scaling_strides": [1, 2, 4, 8], "scaling_source": "generated:terrain:48"},
-    "full": {"random": 200000, "width": 320, "height": 320, "runs": 5, "build_runs": 3, "optimum_nodes": 200,
+              "co_values": ("0", "1", "inf"), "scaling_strides": [1, 2, 4, 8], "scaling_build_runs": 3, "scaling_source": "generated:terrain:48"},
+    "full": {"random": 100000, "width": 256, "height": 256, "runs": 5, "build_runs": 3, "optimum_nodes": 200,
              "optimum_max_refs": 16, "heat_size": 320, "limit_grid": 80000, "limit_full": 300000,
-             "limit_lookahead": 300000, "limit_build": 10**9, "limit_overlap": 10**9, "skip_rotated_overlap": False,
-             "co_values": ("0", "0.1", "0.3", "1", "3", "10", "inf"), "scaling_strides": [1, 2, 4, 8, 16, 32],
+             "limit_lookahead": 300000, "limit_build": 300000, "limit_overlap": 300000, "skip_rotated_overlap": False,
+             "co_values": ("0", "0.3", "1", "3", "inf"), "scaling_strides": [2, 4, 8, 16, 32], "scaling_build_runs": 2,
              "scaling_source": None},
 }
 
@@ -128,6 +128,7 @@ class Optimum(Experiment):
     def analyse(self, jobs):
         rows, plot, flags, worst_all, medians = [], {"scenes": [], "ratios": {}}, [], 0.0, []
         for scene, record in jobs:
+            nodes = record["outputs"][0].get("scene", {}).get("nodes", 0)
             spaces = record["outputs"][0].get("scene", {}).get("search_spaces", {})
             plot["scenes"].append(scene.label)
             for name in self.SPACES:
@@ -136,8 +137,8 @@ class Optimum(Experiment):
                     continue
                 ratios = s.get("ratios", [])
                 plot["ratios"].setdefault(name, []).append(ratios)
-                n = len(ratios) or 1
-                rows.append([scene.label, name, len(ratios), _fmt(s["median_ratio"], 3), _fmt(s["mean_ratio"], 3),
+                n = len(ratios) or max(1, nodes - s["infeasible"])
+                rows.append([scene.label, name, n, _fmt(s["median_ratio"], 3), _fmt(s["mean_ratio"], 3),
                              _fmt(s["max_ratio"], 3), f"{100 * s['at_optimum'] / n:.0f}%",
                              f"{100 * s['below_optimum'] / n:.0f}%", s["infeasible"]])
             cbvh = spaces.get(self.SPACES[0])
@@ -365,7 +366,7 @@ class BuildQuality(Experiment):
     EMBREE_TREES = ("embree-medium", "embree-high")  # the trees the CLI imports (LOW has no binary tree to take)
 
     def params(self, scene, triangles, profile):
-        ours = [b for b in self.OURS if b != "full" or triangles <= PROFILES[profile]["limit_full"]]
+        ours = [b for b in self.OURS if b != "full" or triangles <= PROFILES[profile]["limit_grid"]]
         return _compare_params(profile, ours + list(self.EMBREE_TREES), build_runs=PROFILES[profile]["build_runs"],
                                embree=("low", "medium", "high"), no_epo=True)
 
@@ -411,7 +412,7 @@ class Scaling(Experiment):
         return chosen, ([] if chosen else ["no untransformed scene file to take subsets of"])
 
     def params(self, scene, triangles, profile):
-        p = _compare_params(profile, self.BUILDERS, build_runs=PROFILES[profile]["build_runs"], embree=("high",),
+        p = _compare_params(profile, self.BUILDERS, build_runs=PROFILES[profile]["scaling_build_runs"], embree=("high",),
                             no_epo=True)
         p.update(random=1000, width=16, height=16, runs=1, strides=PROFILES[profile]["scaling_strides"])
         return p

@@ -257,7 +257,7 @@ def fig_heatmaps(plot, out: Path) -> dict:
             ax.grid(False)
             ax.set_title(f"{b}: mean {scene['mean'][b]:.1f}", color=colour(b) if b != "embree-high" else "black")
             if c == 0:
-                ax.set_ylabel(scene["label"])
+                ax.set_ylabel(f"{scene['label']}\n(colour scale 0 to {scene['scale']:.0f})")
     fig.suptitle("Traversal work per pixel (nodes + triangles tested, binary kernel); one colour scale per row, "
                  "set by cbvh's 99th percentile")
     return _save(fig, out, "heatmaps")
