@@ -90,6 +90,9 @@ def fig_optimum(plot, out: Path) -> dict:
     ax.axhline(1.0, color="black", linewidth=0.8)
     ax.axhline(7.0, color="#d62728", linewidth=1.0, linestyle=":", label="slides' example: 700 / 100 = 7x")
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+    ax.set_ylim(top=9)
     ax.set_ylabel("best local split cost / exhaustive optimum (ratio, log)")
     ax.set_xticks(range(len(scenes)))
     ax.set_xticklabels(scenes, rotation=20, ha="right")
@@ -225,8 +228,9 @@ def fig_scaling(plot, out: Path) -> dict:
         ns = [n for n, _ in series]
         triples = [b for _, b in series]
         e = plot["exponents"].get(label)
+        name = label.replace("(Embree kernel)", "(Embree's own build)")
         ax.errorbar(ns, [t[0] for t in triples], yerr=_errors(triples), marker="o", color=colour(label), capsize=2,
-                    label=f"{label} (e = {e:.2f})" if e is not None else label,
+                    label=f"{name} (e = {e:.2f})" if e is not None else name,
                     markerfacecolor="white" if label.endswith(")") else colour(label))
     if plot["series"]:
         ns = sorted({n for s in plot["series"].values() for n, _ in s})
