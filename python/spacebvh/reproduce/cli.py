@@ -224,6 +224,15 @@ def main(argv=None) -> int:
           + (" (--report-only: none run)" if args.report_only else ""), file=sys.stderr)
     done, failed = ([], []) if args.report_only else run_jobs(pending, store, args.scheduler, not args.no_progress)
 
+    command = "python -m spacebvh.reproduce " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
+    if done:  # the runs that produced the store's results, for the report (a --report-only run adds none)
+        history = store.root / "runs.json"
+        runs = json.loads(history.read_text()) if history.is_file() else []
+        runs.append({"command": command, "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "jobs_run": len(done),
+                     "jobs_failed": len(failed), "wall_s": round(time.perf_counter() - start, 1),
+                     "host": platform.node(), "scheduler": args.scheduler or "local"})
+        store.root.mkdir(parents=True, exist_ok=True)
+        history.write_text(json.dumps(runs, indent=1))
     out.mkdir(parents=True, exist_ok=True)
     run_log = {"jobs_total": len(planned), "jobs_cached": [j.name for j in cached], "jobs_run": done,
                "jobs_failed": failed, "wall_s": round(time.perf_counter() - start, 1)}
@@ -254,7 +263,6 @@ def main(argv=None) -> int:
                                                              for m in missing]
         entries.append((experiment, analysis, found, job_notes))
 
-    command = "python -m spacebvh.reproduce " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
     hosts = sorted({r["host"] for _, a, found, _ in entries for _, r, _ in found})
     environment = {"command": command, "profile": profile, "library_version": lib, "git": git_revision(),
                    "cli": cli, "machine": machine(), "job_hosts": hosts, "versions": versions(),
@@ -264,6 +272,7 @@ def main(argv=None) -> int:
                                "triangles": triangles[s]} for s in scenes],
                    "jobs_total": len(planned), "jobs_run": len(done), "jobs_cached": len(cached),
                    "jobs_failed": failed, "notes": notes,
+                   "job_runs": json.loads((store.root / "runs.json").read_text()) if (store.root / "runs.json").is_file() else [],
                    "wall_s": time.perf_counter() - start}
     index = write_report(out, entries, environment, store.root)
     run_log["wall_s"] = round(time.perf_counter() - start, 1)
