@@ -3,6 +3,7 @@
 processes gives the local run's results (all but timings); the HTML in headless Chromium."""
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import shutil
@@ -19,8 +20,12 @@ pytest.importorskip("matplotlib")
 pytest.importorskip("tqdm")
 
 PYTHON_DIR = Path(__file__).resolve().parents[1]
-REPO = PYTHON_DIR.parent
-sys.path.insert(0, str(PYTHON_DIR))
+# An installed package (pip install .) is used as it is; a checkout's python/ only when none has reproduce.
+_installed = importlib.util.find_spec("spacebvh")
+ON_PATH = _installed is not None and any(
+    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or []))
+if not ON_PATH:
+    sys.path.insert(0, str(PYTHON_DIR))
 
 from spacebvh.reproduce.experiments import EXPERIMENTS  # noqa: E402
 from spacebvh.reproduce.jobs import find_cli  # noqa: E402
@@ -35,7 +40,8 @@ pytestmark = pytest.mark.skipif(CLI is None, reason="the spacebvh CLI is not bui
 
 def _env():
     env = dict(os.environ)
-    env["PYTHONPATH"] = str(PYTHON_DIR) + os.pathsep + env.get("PYTHONPATH", "")
+    if not ON_PATH:
+        env["PYTHONPATH"] = str(PYTHON_DIR) + os.pathsep + env.get("PYTHONPATH", "")
     env["SPACEBVH_CLI"] = CLI
     return env
 

@@ -2,13 +2,20 @@
 ratios between rows and the deterministic view of a result."""
 from __future__ import annotations
 
+import importlib.util
 import json
 import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+PYTHON_DIR = Path(__file__).resolve().parents[1]
+# An installed package (pip install .) is used as it is; a checkout's python/ only when none has reproduce.
+_installed = importlib.util.find_spec("spacebvh")
+ON_PATH = _installed is not None and any(
+    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or []))
+if not ON_PATH:
+    sys.path.insert(0, str(PYTHON_DIR))
 
 from spacebvh.reproduce.jobs import generated_scene  # noqa: E402
 from spacebvh.reproduce.results import deterministic, row_label, speed_ratio  # noqa: E402

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import importlib.util
 import json
 import os
 import platform
@@ -165,24 +166,43 @@ def run_jobs(pending: list[Job], store: Store, scheduler: str | None, progress: 
         return [], []
     import logging
 
-    from distributed import Client, LocalCluster, as_completed
-    from tqdm import tqdm
+    from distributed import Client, LocalCluster
 
     logging.getLogger("distributed").setLevel(logging.ERROR)
-    if scheduler:
-        import cloudpickle
+    with tempfile.TemporaryDirectory() as folder:
+        if scheduler:
+            client, cluster = Client(scheduler), None
+            run_job = ship_jobs_module(client, Path(folder))
+        else:
+            cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
+            client, run_job = Client(cluster), jobs_module.run_job
+        return _dispatch(client, cluster, run_job, pending, store, progress)
 
-        # Workers need no copy of this package: the job code (standard library only) travels by value.
-        cloudpickle.register_pickle_by_value(jobs_module)
-        client, cluster = Client(scheduler), None
-    else:
-        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
-        client = Client(cluster)
+
+def ship_jobs_module(client, folder: Path):
+    """Workers need no copy of this package: Dask's upload_file sends them the job code (standard library
+    only) as a module named after its content, and the tasks refer to that module."""
+    source = Path(jobs_module.__file__).read_bytes()
+    name = "spacebvh_reproduce_jobs_" + hashlib.sha256(source).hexdigest()[:12]
+    path = folder / f"{name}.py"
+    path.write_bytes(source)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # so the client pickles run_job by this name
+    spec.loader.exec_module(module)
+    client.upload_file(str(path))
+    return module.run_job
+
+
+def _dispatch(client, cluster, run_job, pending, store, progress):
+    from distributed import as_completed
+    from tqdm import tqdm
+
     done, failed = [], []
     try:
         futures = {}
         for job in pending:
-            future = client.submit(jobs_module.run_job, job.spec, key=f"reproduce-{job.name}-{job.key[:16]}-{time.time_ns()}",
+            future = client.submit(run_job, job.spec, key=f"reproduce-{job.name}-{job.key[:16]}-{time.time_ns()}",
                                    pure=False)
             futures[future] = job
         bar = tqdm(total=round(sum(j.weight for j in pending), 1), unit="work", disable=not progress,

@@ -34,9 +34,9 @@ def find_cli(hint: str | None = None) -> str:
     found = shutil.which("spacebvh")
     if found:
         return found
-    repo_build = Path(__file__).resolve().parents[3] / "build" / "spacebvh"
-    if repo_build.is_file():
-        return str(repo_build)
+    here = Path(__file__).resolve()
+    if len(here.parents) > 3 and (here.parents[3] / "build" / "spacebvh").is_file():  # a checkout's build
+        return str(here.parents[3] / "build" / "spacebvh")
     raise FileNotFoundError("spacebvh CLI not found: set SPACEBVH_CLI, put spacebvh on PATH, or build it (scripts/build.sh)")
 
 
