@@ -229,6 +229,26 @@ def _dispatch(client, cluster, run_job, pending, store, progress):
     return done, failed
 
 
+def timing_spread(records) -> float | None:
+    """The run's timing noise: the median over every (row, ray kind) of a compare run of the width of its
+    per-run ratio to the first row, (max - min) / median. Differences smaller than this are not resolved."""
+    import statistics
+
+    from .results import RAY_KINDS, speed_ratio
+
+    widths = []
+    for record in records:
+        for output in record.get("outputs", []):
+            for scene in output.get("scenes", []):
+                base = scene["rows"][0]
+                for row in scene["rows"][1:]:
+                    for kind in RAY_KINDS:
+                        med, lo, hi = speed_ratio(row, base, kind)
+                        if med > 0 and lo != hi:
+                            widths.append((hi - lo) / med)
+    return statistics.median(widths) if widths else None
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
     start = time.perf_counter()
@@ -283,6 +303,7 @@ def main(argv=None) -> int:
                                                              for m in missing]
         entries.append((experiment, analysis, found, job_notes))
 
+    spread = timing_spread([r for _, _, found, _ in entries for _, r, _ in found])
     hosts = sorted({r["host"] for _, a, found, _ in entries for _, r, _ in found})
     environment = {"command": command, "profile": profile, "library_version": lib, "git": git_revision(),
                    "cli": cli, "machine": machine(), "job_hosts": hosts, "versions": versions(),
@@ -293,7 +314,7 @@ def main(argv=None) -> int:
                    "jobs_total": len(planned), "jobs_run": len(done), "jobs_cached": len(cached),
                    "jobs_failed": failed, "notes": notes,
                    "job_runs": json.loads((store.root / "runs.json").read_text()) if (store.root / "runs.json").is_file() else [],
-                   "wall_s": time.perf_counter() - start}
+                   "timing_spread": spread, "wall_s": time.perf_counter() - start}
     index = write_report(out, entries, environment, store.root)
     run_log["wall_s"] = round(time.perf_counter() - start, 1)
     (out / "run.json").write_text(json.dumps(run_log, indent=1))

@@ -218,7 +218,7 @@ def fig_build_quality(plot, out: Path) -> dict:
             a.plot([], [], "s", color=colour(label), label=label)
     for i, s in enumerate(scenes):
         a.plot([], [], SCENE_MARKERS[i % len(SCENE_MARKERS)], color="white", markeredgecolor="black", label=s)
-    a.legend(fontsize=6.5, ncol=2)
+    a.legend(fontsize=7, ncol=8, loc="upper center", bbox_to_anchor=(1.1, -0.14))  # below both panels, off the data
     return _save(fig, out, "build_quality")
 
 

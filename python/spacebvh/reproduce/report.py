@@ -119,14 +119,15 @@ timed runs go round robin over the rows on the same rays, so a shared machine's 
 are the median over the timed runs of the per-run ratio; error bars span the runs (min to max). Builders keep one
 colour in every figure.</p>
 <p><b>Command:</b> <code>{html.escape(env['command'])}</code><br>
-{''.join(f"<b>Jobs run by:</b> <code>{html.escape(r['command'])}</code> ({r['jobs_run']} jobs, {r['wall_s']:.0f} s wall, {html.escape(r['date'])}, scheduler {html.escape(r['scheduler'])})<br>" for r in env.get('job_runs', []))}
+{''.join(f"<b>Jobs run by:</b> <code>{html.escape(r['command'])}</code> ({r['jobs_run']} jobs, {r['wall_s']:.0f} s wall, {html.escape(r['date'])}, scheduler {html.escape(r['scheduler'])}{'; ' + html.escape(r['note']) if r.get('note') else ''})<br>" for r in env.get('job_runs', []))}
 <b>Profile:</b> {html.escape(env['profile'])} · <b>jobs:</b> {env['jobs_total']} ({env['jobs_run']} run now,
-{env['jobs_cached']} from the store) · <b>wall time:</b> {env.get('wall_s', 0):.0f} s<br>
+{env['jobs_cached']} from the store) · <b>this command's wall time:</b> {env.get('wall_s', 0):.0f} s<br>
 <b>Machine:</b> {html.escape(env['machine']['cpu'])}, {env['machine']['cores']} cores,
 {env['machine']['memory_gib']:.0f} GiB, {html.escape(env['machine']['platform'])} ·
 <b>spacebvh:</b> {html.escape(env['library_version'])} · <b>Python</b> {html.escape(env['versions']['python'])},
 dask {html.escape(env['versions'].get('dask', '-'))}, matplotlib {html.escape(env['versions'].get('matplotlib', '-'))}
 · <a href="environment.json">environment.json</a> (versions, options, scenes and their hashes)</p>
+{f"<p><b>Timing noise of this run:</b> the per-run speed ratio between two rows spans a median {100 * env['timing_spread']:.0f} % of its value (min to max over the timed runs); speed differences smaller than that are not resolved here.</p>" if env.get('timing_spread') else ""}
 <h2>Summary</h2>
 {overview}
 {''.join(f'<p class="muted">Note: {html.escape(n)}</p>' for n in env.get('notes', []))}
@@ -146,8 +147,11 @@ def _markdown(summary_rows, env: dict) -> str:
              "commands, raw JSON in [jobs/](jobs)).", "",
              f"- Command: `{env['command']}`",
              *[f"- Jobs run by `{r['command']}`: {r['jobs_run']} jobs in {r['wall_s']:.0f} s wall ({r['date']}, "
-               f"scheduler {r['scheduler']})" for r in env.get("job_runs", [])],
-             f"- Wall time: {env.get('wall_s', 0):.0f} s ({env['jobs_run']} jobs run, {env['jobs_cached']} from the store)",
+               f"scheduler {r['scheduler']}{'; ' + r['note'] if r.get('note') else ''})" for r in env.get("job_runs", [])],
+             f"- This report: written in {env.get('wall_s', 0):.0f} s by the command above ({env['jobs_run']} jobs run by it, "
+             f"{env['jobs_cached']} taken from the store)",
+             *([f"- Timing noise: the per-run speed ratio between two rows spans a median {100 * env['timing_spread']:.0f} % "
+                "of its value; smaller speed differences are not resolved by this run"] if env.get("timing_spread") else []),
              f"- Machine: {env['machine']['cpu']}, {env['machine']['cores']} cores; spacebvh {env['library_version']} "
              f"(git {env.get('git', '-')})", "",
              "| experiment | slide's claim | verdict | our numbers | wrong answers |", "|---|---|---|---|---:|"]
