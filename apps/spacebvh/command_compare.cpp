@@ -30,6 +30,7 @@ struct KindResult {
     double nodes_per_ray = -1, triangles_per_ray = -1;  // -1: not measured (Embree)
     size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
     std::vector<HitRecord> closest, occlusion;
+    std::vector<double> closest_ms, occlusion_ms;  // every timed run, in round-robin order (spread of the median)
 };
 
 struct Row {
@@ -37,6 +38,7 @@ struct Row {
     std::string kernel;  // the kernel column: one name, or the per-kind choice of "auto"
     std::string kernels[3];  // per ray kind
     double build_ms = 0;
+    std::vector<double> build_ms_runs;
     std::optional<TreeStats> stats;
     std::optional<CostModel> cost;
     KindResult kinds[3];
@@ -96,6 +98,7 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs, const
                 records[ray] = occlusion ? occlusion_record(occluded[m][i]) : to_record(hits[m][i]);
             }
             (occlusion ? result.occlusion_mrays : result.closest_mrays) = mrays;
+            (occlusion ? result.occlusion_ms : result.closest_ms) = ms[m];
         }
     }
 }
@@ -335,6 +338,7 @@ void add_compare_command(CLI::App& app) {
                     row.name = builders[b].label + " (C_o=" + number_or_dash(tree_cost.overlap_penalty, 2) + ")";
                     row.cost = tree_cost;
                     row.build_ms = median(build_ms);
+                    row.build_ms_runs = build_ms;
                     row.stats = tree_stats;
                     std::map<std::string, const Tracer*> by_kernel;  // shared between kinds
                     for (RayKind kind : kKinds) {
@@ -381,6 +385,7 @@ void add_compare_command(CLI::App& app) {
                     throw_if_interrupted();
                 }
                 row.build_ms = median(build_ms);
+                row.build_ms_runs = build_ms;
                 const EmbreeScene* traced = embree.get();
                 for (RayKind kind : kKinds) {
                     KindResult& result = row.kinds[int(kind)];
@@ -445,6 +450,7 @@ void add_compare_command(CLI::App& app) {
                 nlohmann::json json_row = {{"builder", row.name},
                                            {"kernel", row.kernel},
                                            {"build_ms", row.build_ms},
+                                           {"build_ms_runs", row.build_ms_runs},
                                            {"peak_rss_bytes", row.peak_rss_bytes}};
                 if (row.cost) json_row["cost"] = row.cost->describe();
                 if (ours) {
@@ -462,7 +468,10 @@ void add_compare_command(CLI::App& app) {
                     std::printf(" %s | %s | %s |", ratio_text(k.closest_mrays, bk.closest_mrays, 2).c_str(),
                                 ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(),
                                 number_or_dash(k.nodes_per_ray >= 0 ? std::optional(k.nodes_per_ray) : std::nullopt, 1).c_str());
-                    nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays}, {"occlusion_mrays", k.occlusion_mrays}};
+                    nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays},
+                                                {"occlusion_mrays", k.occlusion_mrays},
+                                                {"closest_ms_runs", k.closest_ms},
+                                                {"occlusion_ms_runs", k.occlusion_ms}};
                     if (!row.kernels[int(kind)].empty()) json_kind["kernel"] = row.kernels[int(kind)];
                     if (k.nodes_per_ray >= 0) {
                         json_kind["nodes_per_ray"] = k.nodes_per_ray;

@@ -139,7 +139,8 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
                     n ? 100.0 * double(row.below_optimum) / double(n) : 0.0, row.infeasible);
         json["search_spaces"][row.name] = {{"mean_ratio", mean},          {"median_ratio", middle},
                                            {"max_ratio", worst},          {"at_optimum", row.at_optimum},
-                                           {"below_optimum", row.below_optimum}, {"infeasible", row.infeasible}};
+                                           {"below_optimum", row.below_optimum}, {"infeasible", row.infeasible},
+                                           {"ratios", row.ratios}};  // per node, for the distribution
     }
     return json;
 }

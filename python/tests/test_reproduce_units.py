@@ -1,0 +1,97 @@
+"""The parts of spacebvh.reproduce that need no CLI: scene specifications, job keys, the store, the
+ratios between rows and the deterministic view of a result."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+PYTHON_DIR = Path(__file__).resolve().parents[1]
+# An installed package (pip install .) is used as it is; a checkout's python/ only when none has reproduce.
+_installed = importlib.util.find_spec("spacebvh")
+ON_PATH = _installed is not None and any(
+    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or []))
+if not ON_PATH:
+    sys.path.insert(0, str(PYTHON_DIR))
+
+from spacebvh.reproduce.jobs import generated_scene  # noqa: E402
+from spacebvh.reproduce.results import deterministic, row_label, speed_ratio  # noqa: E402
+from spacebvh.reproduce.scenes import content_hash, parse_scene  # noqa: E402
+from spacebvh.reproduce.store import Store, job_key  # noqa: E402
+
+
+def test_scene_specs_parse_transforms_into_cli_flags(tmp_path):
+    obj = tmp_path / "room.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    scene = parse_scene(f"{obj}@rotate=x:45,y:45,z:45;translate=1 2 3")
+    assert scene.source == str(obj.resolve())
+    assert scene.flags == ["--rotate", "x:45,y:45,z:45", "--translate", "1", "2", "3"]
+    assert scene.label == "room rotated x:45,y:45,z:45 moved 1 2 3"
+    assert "/" not in scene.slug and "," not in scene.slug and scene.is_rotated
+    assert parse_scene("builtin:interior").flags == []
+    with pytest.raises(ValueError, match="rotate"):
+        parse_scene("builtin:interior@spin=3")
+    with pytest.raises(FileNotFoundError):
+        parse_scene(str(tmp_path / "absent.obj"))
+
+
+def test_content_hash_follows_the_bytes_and_the_transform(tmp_path):
+    obj = tmp_path / "a.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    plain = content_hash(parse_scene(str(obj)), "lib1")
+    assert plain == content_hash(parse_scene(str(obj)), "lib2")  # a file is its bytes
+    assert plain != content_hash(parse_scene(f"{obj}@rotate=x:45"), "lib1")
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 2 0\nf 1 2 3\n")
+    assert plain != content_hash(parse_scene(str(obj)), "lib1")
+    builtin = parse_scene("builtin:interior")
+    assert content_hash(builtin, "lib1") != content_hash(builtin, "lib2")  # built-ins are the library's
+
+
+def test_job_keys_are_canonical_and_the_store_round_trips(tmp_path):
+    inputs = {"b": [1, 2], "a": {"y": 1, "x": 2}}
+    assert job_key(inputs) == job_key({"a": {"x": 2, "y": 1}, "b": [1, 2]})
+    assert job_key(inputs) != job_key({"a": {"x": 2, "y": 1}, "b": [2, 1]})
+    store = Store(tmp_path)
+    key = job_key(inputs)
+    assert store.load("exp", "scene", key) is None
+    path = store.save("exp", "scene", key, inputs, {"outputs": [1]})
+    assert store.load("exp", "scene", key)["result"] == {"outputs": [1]}
+    path.write_text(path.read_text()[:20])  # a write cut short: the job runs again
+    assert store.load("exp", "scene", key) is None
+    store.save("exp", "scene", key, inputs, {"error": "failed"})
+    assert store.load("exp", "scene", key) is None  # failures are not results
+    assert not list(tmp_path.rglob("*.tmp"))
+
+
+def _row(name, ms, sah=None):
+    row = {"builder": name, "kernel": "k", "random": {"closest_ms_runs": ms, "closest_mrays": 1.0 / ms[0]}}
+    if sah is not None:
+        row["sah"] = sah
+    return row
+
+
+def test_speed_ratios_pair_the_runs_of_one_round_robin():
+    base, row = _row("cbvh (C_o=0.00)", [10.0, 20.0, 10.0], 1.0), _row("spatial (C_o=1.00)", [5.0, 20.0, 8.0], 1.0)
+    assert speed_ratio(row, base, "random") == (1.25, 1.0, 2.0)  # per run 2.0, 1.0, 1.25
+    assert row_label(base) == "cbvh"
+    assert row_label(_row("embree-high", [1.0])) == "embree-high (Embree kernel)"
+
+
+def test_deterministic_drops_timings_and_keeps_answers():
+    result = [{"threads": 2, "scenes": [{"rows": [{"builder": "cbvh", "build_ms": 3.0, "sah": 1.0 / 3,
+                                                   "random": {"closest_mrays": 5.0, "wrong": 0}}]}]}]
+    kept = deterministic(result)
+    assert kept == [{"scenes": [{"rows": [{"builder": "cbvh", "sah": round(1.0 / 3, 9), "random": {"wrong": 0}}]}]}]
+    assert json.dumps(kept)
+
+
+def test_generated_scene_is_deterministic_and_valid():
+    vertices, triangles = generated_scene("generated:terrain:8")
+    assert (vertices, triangles) == generated_scene("generated:terrain:8")
+    assert len(triangles) > 2 * 8 * 8
+    assert all(1 <= i <= len(vertices) for t in triangles for i in t)
+    with pytest.raises(ValueError):
+        generated_scene("generated:teapot:8")
