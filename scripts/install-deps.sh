@@ -5,6 +5,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
+  ccache                # a second build of the same sources (the Python package's) comes from the cache
   libtbb-dev            # oneTBB: parallel build and tracing
   libembree-dev         # Embree 3: the yardstick in `spacebvh compare` and the test oracle
   libtinygltf-dev       # glTF 2.0 scenes (.gltf/.glb)

@@ -13,7 +13,7 @@ python3 -m venv "$venv"
 # it. The build folder sits beside ./build so ccache's base_dir rewriting sees the same relative paths.
 if command -v ccache >/dev/null; then export CMAKE_CXX_COMPILER_LAUNCHER=ccache; fi
 start=$SECONDS
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests]"
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests,reproduce]"
 echo "pip install . took $((SECONDS - start)) s"
 rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.

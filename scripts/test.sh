@@ -5,6 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+bash scripts/install-test-tools.sh
 bash scripts/build.sh
 (cd build && ctest -j "$(nproc)" --output-on-failure --timeout 900)
 bash scripts/test-python.sh

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """`python -m spacebvh.reproduce --quick` end to end: every experiment's figure, table and JSON; the store
 (rerun runs nothing, removing one result reruns that job only); a real Dask scheduler with two worker
 processes gives the local run's results (all but timings); the HTML in headless Chromium."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The parts of spacebvh.reproduce that need no CLI: scene specifications, job keys, the store, the
 ratios between rows and the deterministic view of a result."""
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reproduce the experiments of Popov et al. 2009 ("Object Partitioning Considered Harmful") with spacebvh:
 `python -m spacebvh.reproduce` (console script `spacebvh-reproduce`). See cli.py for the options."""
 

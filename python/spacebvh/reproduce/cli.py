@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """`python -m spacebvh.reproduce`: runs the paper's experiments as independent Dask jobs (one scene and
 one experiment each, measured whole on one worker), keeps each job's result in a store keyed by its
 inputs, and writes the report."""

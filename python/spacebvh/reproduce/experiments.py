@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The paper's experiments: which scenes each runs on, the job parameters, and the analysis that turns
 the jobs' JSON into a table, numbers and a verdict on the slide's claim.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One matplotlib figure per experiment, written as SVG and PNG. Every builder has one colour in every
 figure (BUILDER_COLOURS); Embree's own kernel is drawn in its tree's colour with a hatched or hollow
 mark. Error bars span the timed runs (min to max of the per-run ratio)."""

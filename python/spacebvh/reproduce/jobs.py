@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """One job: one experiment on one scene, run whole on one worker by calling the `spacebvh` CLI.
 
 This module imports only the standard library, so a Dask worker that lacks the package can run it

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """The report directory: index.html (self-contained: relative links only, inline CSS, no script, no
 network), figures/*.svg|png, tables/*.csv, results/*.json (each experiment's numbers and verdict),
 jobs/ (every job's raw JSON) and environment.json."""

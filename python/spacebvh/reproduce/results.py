@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Reading the CLI's JSON: compare rows by builder, ratios between rows of one run with their spread over
 the timed runs, and the deterministic part of a result (what two runs on different machines share)."""
 from __future__ import annotations

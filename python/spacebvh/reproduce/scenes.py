@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: MIT
 """Scene specifications: a file, `builtin:NAME` or `generated:terrain:SIZE`, with load-time transforms
 written after '@' (`crytek_sponza.obj@rotate=x:45,y:45,z:45`, `scene.ply@scale=2;translate=0 0 1`),
 and their content hashes (the part of a job's key that says which triangles it saw)."""
