@@ -27,6 +27,20 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT.parent / "shared" / "scenes"
 
 
+def read_obj(path):
+    """Vertices and triangles of a plain OBJ (`v` records; `f` with the first index of each corner), as
+    ../shared/scenes/MANIFEST.md describes them; trimesh's loader needs Pillow for their materials."""
+    vertices, faces = [], []
+    with open(path) as lines:
+        for line in lines:
+            if line.startswith("v "):
+                vertices.append(line.split()[1:4])
+            elif line.startswith("f "):
+                faces.append([int(corner.split("/")[0]) for corner in line.split()[1:4]])
+    faces = np.array(faces, dtype=np.int64)
+    return np.array(vertices, dtype=np.float64), np.where(faces > 0, faces - 1, faces + len(vertices))
+
+
 def rays_for(mesh, count, seed):
     rng = np.random.default_rng(seed)
     lo, hi = mesh.bounds
@@ -61,14 +75,13 @@ def main():
         if not path.exists():
             print(f"skipping {name}: no {path}")
             continue
-        loaded = trimesh.load(str(path), force="mesh", process=False)
-        vertices, faces = np.asarray(loaded.vertices), np.asarray(loaded.faces)
+        vertices, faces = read_obj(path)
         theirs = trimesh.Trimesh(vertices, faces, process=False)  # Embree backend
         ours = trimesh.Trimesh(vertices, faces, process=False)
         ours.ray = drop_in.RayMeshIntersector(ours, builder=args.builder, threads=args.threads)
         assert type(theirs.ray).__module__ == "trimesh.ray.ray_pyembree", type(theirs.ray)
-        origins, directions = rays_for(loaded, args.rays, 1)
-        points = rays_for(loaded, args.rays, 2)[0]
+        origins, directions = rays_for(theirs, args.rays, 1)
+        points = rays_for(theirs, args.rays, 2)[0]
 
         # Builds, apart from the queries.
         build_theirs, _ = timed(theirs.ray.intersects_first, origins[:1], directions[:1])
