@@ -56,6 +56,8 @@ class Bvh:
     def sah(self) -> float: ...
     def stats(self, epo: bool = False) -> dict[str, Union[int, float]]:
         """Structure, memory and tree SAH (and EPO with epo=True) as a dict."""
+    def save(self, path: str) -> None:
+        """Writes the tree to a tree file (docs/tree-format.md)."""
 
 class RayQueries:
     """Exact queries beyond the closest hit: every crossing, counts, first/any crossing, containment.
@@ -177,6 +179,9 @@ class EmbreeTracer:
     ) -> npt.NDArray[np.bool_]:
         """As Tracer.occluded."""
 
+def load_bvh(path: str, scene: Scene) -> Bvh:
+    """Reads a tree file built over this scene; spacebvh.Error names the file when it does not fit."""
+
 def load_scene(
     source: str, *, rotate: str = "", scale: float = 1.0, translate: Sequence[float] = (0.0, 0.0, 0.0)
 ) -> Scene:
@@ -215,10 +220,10 @@ def build(
     """Builds a BVH with a named builder (builders())."""
 
 def random_rays(scene: Scene, count: int, seed: int = 1) -> _Rays:
-    """The random rays of ../shared/spec/rays.md: (origins, directions)."""
+    """The random rays of docs/rays.md: (origins, directions)."""
 
 def primary_rays(scene: Scene, width: int = 1024, height: int = 1024, camera: str = "") -> _Rays:
-    """The primary rays of ../shared/spec/rays.md, row by row from the top: (origins, directions)."""
+    """The primary rays of docs/rays.md, row by row from the top: (origins, directions)."""
 
 def diffuse_rays(
     scene: Scene,
@@ -229,7 +234,7 @@ def diffuse_rays(
     seed: int = 1,
     epsilon: float = 0.0,
 ) -> _Rays:
-    """The diffuse rays of ../shared/spec/rays.md: one bounce per primary ray that hits."""
+    """The diffuse rays of docs/rays.md: one bounce per primary ray that hits."""
 
 def read_rays(
     path: str,
@@ -237,7 +242,7 @@ def read_rays(
     """A ray file: (origins, directions, tmin, tmax) float32 arrays."""
 
 def write_rays(path: str, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ...) -> None:
-    """Writes a ray file of ../shared/spec/rays.md."""
+    """Writes a ray file of docs/rays.md."""
 
 def read_hits(path: str) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]:
     """A hit file: (t, primitive) arrays, primitive -1 for a miss."""

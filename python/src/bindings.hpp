@@ -68,7 +68,7 @@ void without_gil(int threads, Work&& work) {
 }
 
 // A camera string ('ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy') in the caller's frame, taken into the scene's;
-// empty: the scene's default camera of ../shared/spec/rays.md.
+// empty: the scene's default camera of docs/rays.md.
 Camera camera_in_frame(const PyScene& scene, const std::string& text);
 
 void bind_scenes(py::module_& m);

@@ -5,6 +5,7 @@
 
 #include "bindings.hpp"
 #include "spacebvh/presets.hpp"
+#include "spacebvh/tree_file.hpp"
 #include "spacebvh/tools/embree_builder.hpp"
 #include "spacebvh/tools/metrics.hpp"
 
@@ -88,7 +89,46 @@ void bind_build(py::module_& m) {
         .def_property_readonly("sah", [](const PyBvh& t) { return tree_sah(*t.bvh, t.bvh->cost); },
                                "The tree's SAH cost under its cost model.")
         .def("stats", &stats_of, py::arg("epo") = false,
-             "Structure, memory and tree SAH (and EPO, the slow one, with epo=True) as a dict.");
+             "Structure, memory and tree SAH (and EPO, the slow one, with epo=True) as a dict.")
+        .def(
+            "save",
+            [](const PyBvh& t, const std::string& path) {
+                py::gil_scoped_release unlocked;
+                save_bvh(path, *t.bvh, t.scene.scene->triangles, "python");
+            },
+            py::arg("path"),
+            "Writes the tree to a tree file (docs/tree-format.md); load_bvh(path, scene) reads it back without "
+            "rebuilding.")
+        // Pickling: the scene and the tree file's bytes, validated again (checksum, geometry hash, structure)
+        // when unpickled.
+        .def(py::pickle(
+            [](const PyBvh& t) {
+                const std::vector<std::byte> bytes = serialize_bvh(*t.bvh, t.scene.scene->triangles, "python");
+                return py::make_tuple(t.scene, py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+            },
+            [](const py::tuple& state) {
+                if (state.size() != 2) throw Error("Bvh pickle: expected 2 fields, got " + std::to_string(state.size()));
+                PyScene scene = state[0].cast<PyScene>();
+                const std::string data = state[1].cast<std::string>();
+                const auto* begin = reinterpret_cast<const std::byte*>(data.data());
+                auto bvh = std::make_shared<Bvh>(
+                    deserialize_bvh(std::span<const std::byte>(begin, data.size()), scene.scene->triangles, "pickled Bvh"));
+                return PyBvh{std::move(scene), std::move(bvh)};
+            }));
+
+    m.def(
+        "load_bvh",
+        [](const std::string& path, const PyScene& scene) {
+            std::shared_ptr<Bvh> bvh;
+            {
+                py::gil_scoped_release unlocked;
+                bvh = std::make_shared<Bvh>(load_bvh(path, scene.scene->triangles));
+            }
+            return PyBvh{scene, std::move(bvh)};
+        },
+        py::arg("path"), py::arg("scene"),
+        "Reads a tree file (Bvh.save, or the CLI's build --save) built over this scene; raises spacebvh.Error naming "
+        "the file when it is truncated, corrupted, of another format version or built over other geometry.");
 
     m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
           py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,

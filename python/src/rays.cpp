@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Rays of ../shared/spec/rays.md (random, primary, diffuse) in the caller's frame, and ray and hit
+// Rays of docs/rays.md (random, primary, diffuse) in the caller's frame, and ray and hit
 // files (float32, as the files are).
 #include <cmath>
 
@@ -42,7 +42,7 @@ py::tuple rays_as_arrays(const Frame& frame, const std::vector<Ray>& rays, bool 
     return py::make_tuple(origins, directions);
 }
 
-// Hit records (../shared/spec/rays.md) from t and primitive arrays (-1 = a miss, t = inf).
+// Hit records (docs/rays.md) from t and primitive arrays (-1 = a miss, t = inf).
 std::vector<HitRecord> make_hit_records(const py::handle& t_arg, const py::handle& primitive_arg) {
     const auto t = py::array_t<float, py::array::forcecast>::ensure(t_arg);
     const auto primitive = py::array_t<int64_t, py::array::forcecast>::ensure(primitive_arg);
@@ -113,7 +113,7 @@ void bind_rays(py::module_& m) {
             return rays_as_arrays(scene.frame, rays);
         },
         py::arg("scene"), py::arg("count"), py::arg("seed") = 1,
-        "The random rays of ../shared/spec/rays.md: (origins, directions) arrays in the caller's frame and the scene's dtype.");
+        "The random rays of docs/rays.md: (origins, directions) arrays in the caller's frame and the scene's dtype.");
     m.def(
         "primary_rays",
         [](const PyScene& scene, uint32_t width, uint32_t height, const std::string& camera) {
@@ -126,12 +126,12 @@ void bind_rays(py::module_& m) {
             return rays_as_arrays(scene.frame, rays);
         },
         py::arg("scene"), py::arg("width") = 1024u, py::arg("height") = 1024u, py::arg("camera") = "",
-        "The primary rays of ../shared/spec/rays.md, row by row from the top: (origins, directions) arrays. camera: "
+        "The primary rays of docs/rays.md, row by row from the top: (origins, directions) arrays. camera: "
         "'ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy' (the MANIFEST's values, in the caller's frame), default the spec's camera "
         "for the scene.");
     m.def("diffuse_rays", &diffuse_rays, py::arg("scene"), py::arg("origins"), py::arg("directions"), py::arg("t"),
           py::arg("primitive"), py::arg("seed") = 1, py::arg("epsilon") = 0.0f,
-          "The diffuse rays of ../shared/spec/rays.md: one cosine-distributed bounce per primary ray that hits (t, "
+          "The diffuse rays of docs/rays.md: one cosine-distributed bounce per primary ray that hits (t, "
           "primitive: intersect()'s answers for those rays, primitive -1 = a miss), in primary order, leaving the "
           "surface at epsilon along its normal (0: the spec's default). Returns (origins, directions) arrays.");
     m.def(
@@ -144,7 +144,7 @@ void bind_rays(py::module_& m) {
             }
             return rays_as_arrays(Frame{}, rays, true);
         },
-        py::arg("path"), "A ray file of ../shared/spec/rays.md: (origins, directions, tmin, tmax) float32 arrays.");
+        py::arg("path"), "A ray file of docs/rays.md: (origins, directions, tmin, tmax) float32 arrays.");
     m.def(
         "write_rays",
         [](const std::string& path, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
@@ -154,7 +154,7 @@ void bind_rays(py::module_& m) {
             write_ray_file(path, rays);
         },
         py::arg("path"), py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0, py::arg("tmax") = double(kInfinity),
-        "Writes a ray file of ../shared/spec/rays.md (float32; tmin, tmax: numbers or one per ray).");
+        "Writes a ray file of docs/rays.md (float32; tmin, tmax: numbers or one per ray).");
     m.def(
         "read_hits",
         [](const std::string& path) {
@@ -166,7 +166,7 @@ void bind_rays(py::module_& m) {
             return hit_records_as_arrays(records);
         },
         py::arg("path"),
-        "A hit file of ../shared/spec/rays.md: (t, primitive) arrays, primitive -1 for a miss (occlusion files: t = 0 "
+        "A hit file of docs/rays.md: (t, primitive) arrays, primitive -1 for a miss (occlusion files: t = 0 "
         "occluded, inf free).");
     m.def(
         "write_hits",
@@ -176,7 +176,7 @@ void bind_rays(py::module_& m) {
             write_hit_file(path, records);
         },
         py::arg("path"), py::arg("t"), py::arg("primitive"),
-        "Writes a hit file of ../shared/spec/rays.md from t and primitive arrays (-1 = a miss), e.g. intersect()'s.");
+        "Writes a hit file of docs/rays.md from t and primitive arrays (-1 = a miss), e.g. intersect()'s.");
 }
 
 }  // namespace spacebvh::python

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <limits>
 
+#include <cstring>
+
+#include <pybind11/stl.h>
+
 #include "bindings.hpp"
 
 namespace spacebvh::python {
@@ -152,6 +156,32 @@ void bind_scenes(py::module_& m) {
                         "float64 vertices hold them in a frame centred on their bounds (origin) and answer in float64 "
                         "in the caller's frame.")
         .def_property_readonly("name", [](const PyScene& s) { return s.scene->name; }, "The file stem, builtin name or mesh name.")
+        // Pickling: the triangles' float32 bytes (as the scene holds them) and the frame, so a scene
+        // comes back bit for bit and a tree saved over it still matches its geometry hash.
+        .def(py::pickle(
+            [](const PyScene& s) {
+                const auto& triangles = s.scene->triangles;
+                const py::bytes data(reinterpret_cast<const char*>(triangles.data()), triangles.size() * sizeof(Triangle));
+                return py::make_tuple(s.scene->name, data, py::make_tuple(s.frame.origin[0], s.frame.origin[1], s.frame.origin[2]),
+                                      s.frame.float64);
+            },
+            [](const py::tuple& state) {
+                if (state.size() != 4) throw Error("Scene pickle: expected 4 fields, got " + std::to_string(state.size()));
+                auto scene = std::make_shared<Scene>();
+                scene->name = state[0].cast<std::string>();
+                const std::string data = state[1].cast<std::string>();
+                if (data.size() % sizeof(Triangle) != 0) throw Error("Scene pickle: triangle data of a wrong length");
+                scene->triangles.resize(data.size() / sizeof(Triangle));
+                std::memcpy(scene->triangles.data(), data.data(), data.size());
+                (void)MeshView(scene->triangles).named(scene->name).triangles();  // refuses NaN/inf coordinates
+                scene->degenerate_count = size_t(std::count_if(scene->triangles.begin(), scene->triangles.end(),
+                                                               [](const Triangle& t) { return t.is_degenerate(); }));
+                Frame frame;
+                const auto origin = state[2].cast<std::array<double, 3>>();
+                frame.origin = origin;
+                frame.float64 = state[3].cast<bool>();
+                return PyScene{std::move(scene), frame};
+            }))
         .def_property_readonly("triangle_count", [](const PyScene& s) { return s.scene->triangles.size(); },
                                "Number of triangles, degenerate ones included.")
         .def_property_readonly("degenerate_count", [](const PyScene& s) { return s.scene->degenerate_count; },

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Embree 3's own binary trees, imported into our Bvh: Embree's tree quality measured under our
-// kernel, metrics and verification. See ../shared/research/embree-measured.md ("Binary tree
-// columns") for the setup this reproduces.
+// kernel, metrics and verification.
 #pragma once
 
 #include <string>

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Embree 3 as the yardstick: the same scene, the same rays, Embree's own BVHs and kernels.
-// See ../shared/research/embree-measured.md for how the reference figures were taken; this adapter
-// reproduces that setup (rtcIntersect1 / rtcOccluded1, oneTBB chunks of 1024 rays).
+// Single rays through rtcIntersect1 / rtcOccluded1 in oneTBB chunks of 1024 rays, and 16-ray packets.
 #pragma once
 
 #include <cstddef>
