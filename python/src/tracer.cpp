@@ -3,6 +3,7 @@
 #include <optional>
 
 #include "bindings.hpp"
+#include "spacebvh/presets.hpp"
 
 namespace spacebvh::python {
 
