@@ -11,6 +11,9 @@ command -v ninja >/dev/null && generator=(-G Ninja)
 # ccache, when present, shares compiled objects between checkouts and rebuilds.
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# Paths relative to the checkout in ccache's keys, so the Python package's build (build-pip/, beside
+# build/) and other checkouts find these objects.
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 # The Python module is built for the python3 on PATH (the one scripts/install-deps.sh prepared).
 cmake -S . -B build "${generator[@]}" "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=$native \
   -DPython3_EXECUTABLE="$(command -v python3)" >/dev/null

@@ -11,7 +11,9 @@ mkdir -p build
 python3 -m venv "$venv"
 # The C++ that scripts/build.sh compiled is compiled again here with the same flags: ccache answers
 # it. The build folder sits beside ./build so ccache's base_dir rewriting sees the same relative paths.
-if command -v ccache >/dev/null; then export CMAKE_CXX_COMPILER_LAUNCHER=ccache; fi
+if command -v ccache >/dev/null; then
+  export CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
+fi
 start=$SECONDS
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests,reproduce]"
 echo "pip install . took $((SECONDS - start)) s"
