@@ -21,4 +21,4 @@ rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.
 (cd / && "$venv/bin/python" -c "import spacebvh; print('import spacebvh:', spacebvh.__version__, spacebvh.__file__)")
 # Exit status 5 (no tests collected) fails this script too: an empty run must not read as a pass.
-"$venv/bin/python" -m pytest -ra python/tests
+PATH="$venv/bin:$PATH" "$venv/bin/python" -m pytest -ra python/tests

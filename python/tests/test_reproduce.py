@@ -66,7 +66,9 @@ def local_run(tmp_path_factory) -> Path:
 
 
 def job_files(out: Path) -> dict[str, Path]:
-    return {p.relative_to(out / "jobs").as_posix(): p for p in (out / "jobs").glob("*/*.json")}
+    """The stored job results (the store's scene_info/ cache of scene facts is not a job)."""
+    return {p.relative_to(out / "jobs").as_posix(): p for p in (out / "jobs").glob("*/*.json")
+            if p.parent.name != "scene_info"}
 
 
 def test_every_experiment_has_figure_table_and_json(local_run):
