@@ -70,17 +70,6 @@ private:
     int size_ = 0;
 };
 
-// s * a.(b x c), added exactly.
-void add_determinant(Expansion& e, double s, Vec3 a, Vec3 b, Vec3 c) {
-    auto term = [&](float x, float y, float z, double sign) { e.add_product(sign * s * double(x), double(y) * double(z)); };
-    term(a.x, b.y, c.z, 1.0);
-    term(a.x, b.z, c.y, -1.0);
-    term(a.y, b.z, c.x, 1.0);
-    term(a.y, b.x, c.z, -1.0);
-    term(a.z, b.x, c.y, 1.0);
-    term(a.z, b.y, c.x, -1.0);
-}
-
 // s * tau * a.(b x c), added exactly (products of four floats: two exact doubles, then a two-product).
 void add_scaled_determinant(Expansion& e, double s, float tau, Vec3 a, Vec3 b, Vec3 c) {
     auto term = [&](float x, float y, float z, double sign) {
@@ -93,6 +82,9 @@ void add_scaled_determinant(Expansion& e, double s, float tau, Vec3 a, Vec3 b, V
     term(a.z, b.x, c.y, 1.0);
     term(a.z, b.y, c.x, -1.0);
 }
+
+// s * a.(b x c), added exactly (tau = 1 multiplies exactly).
+void add_determinant(Expansion& e, double s, Vec3 a, Vec3 b, Vec3 c) { add_scaled_determinant(e, s, 1.0f, a, b, c); }
 
 // Edge function of the directed edge p -> q: dir . ((p - o) x (q - o)) = det(d, p, q) + det(d, q, o)
 // + det(d, o, p), exactly.
