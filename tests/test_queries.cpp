@@ -362,6 +362,8 @@ void check_against_reference(const RayQueries& queries, const ReferenceCase& c, 
     queries.count_hits(rays, counts);
     std::vector<QueryHit> firsts(rays.size());
     queries.first_hits(rays, firsts);
+    std::vector<uint32_t> first_ids(rays.size());
+    queries.first_hit_ids(rays, first_ids);
     std::vector<uint8_t> anys(rays.size());
     queries.any_hits(rays, anys);
     size_t wrong = 0, hits = 0;
@@ -373,6 +375,7 @@ void check_against_reference(const RayQueries& queries, const ReferenceCase& c, 
         bool ok = bool(result);
         ok = ok && counts[i] == reference.size() && bool(anys[i]) == !reference.empty();
         ok = ok && firsts[i].is_hit() == !reference.empty() && (reference.empty() || firsts[i].primitive == ours[0].primitive);
+        ok = ok && first_ids[i] == firsts[i].primitive && (reference.empty() || firsts[i].t == ours[0].t);
         if (!ok && ++wrong <= 5) ADD_FAILURE() << c.what << "/" << tree << " ray " << i << ": " << result.message() << " count " << counts[i];
     }
     EXPECT_EQ(wrong, 0u) << c.what << "/" << tree << ": " << rays.size() << " rays, " << hits << " reference hits";
