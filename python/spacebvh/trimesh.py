@@ -162,6 +162,8 @@ class RayMeshIntersector:
             return result
         bounds = np.asarray(self.mesh.bounds, dtype=np.float64)
         inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
+        if inside_box.all():
+            return queries.contains(points)
         if inside_box.any():
             result[inside_box] = queries.contains(points[inside_box])
         return result

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Exact multi-hit queries (include/spacebvh/queries.hpp) on NumPy rays: every crossing, crossing
 // counts, first and any crossing, and containment, each crossing of a surface reported once.
+#include <atomic>
 #include <optional>
 
 #include <pybind11/stl.h>
@@ -135,16 +136,25 @@ py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, 
     std::vector<uint8_t> answers(points.size());
     const Frame& frame = self.scene.frame;
     without_gil(threads, [&] {
+        // In blocks across the threads; the first row that is not finite is the one named.
+        std::atomic<size_t> first_bad{points.size()};
         rows.visit([&](auto read) {
-            for (size_t i = 0; i < points.size(); ++i) {
-                for (int axis = 0; axis < 3; ++axis) {
-                    const double value = read(i, axis);
-                    if (!std::isfinite(value))
-                        throw Error("points: row " + std::to_string(i) + " is not finite");
-                    points[i][axis] = frame.to_local(value, axis);
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
+                for (size_t i = range.begin(); i < range.end(); ++i) {
+                    for (int axis = 0; axis < 3; ++axis) {
+                        const double value = read(i, axis);
+                        if (!std::isfinite(value)) {
+                            size_t seen = first_bad.load();
+                            while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+                            }
+                            return;
+                        }
+                        points[i][axis] = frame.to_local(value, axis);
+                    }
                 }
-            }
+            });
         });
+        if (first_bad.load() != points.size()) throw Error("points: row " + std::to_string(first_bad.load()) + " is not finite");
         self.queries->contains(points, answers);
     });
     return answers_as_array(answers);
