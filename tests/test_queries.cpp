@@ -317,9 +317,12 @@ TEST(Queries, ContainmentIsRepeatableAndIndependentOfThreads) {
     for (const Triangle& t : scene.triangles) bounds.extend(t.bounds());
     std::vector<Vec3> points;
     SplitMix64 rng(7);
+    // A batch large enough to be walked in coherent order, from a box a fifth larger than the mesh's
+    // (points outside it are clamped to the border cells of that order).
     for (int i = 0; i < 20000; ++i) {
         const Vec3 e = bounds.extent();
-        points.push_back({bounds.lo.x + e.x * rng.uniform(), bounds.lo.y + e.y * rng.uniform(), bounds.lo.z + e.z * rng.uniform()});
+        auto coordinate = [&](float lo, float extent) { return lo + extent * (1.2f * rng.uniform() - 0.1f); };
+        points.push_back({coordinate(bounds.lo.x, e.x), coordinate(bounds.lo.y, e.y), coordinate(bounds.lo.z, e.z)});
     }
     // Mesh vertices too: points on the surface.
     for (size_t i = 0; i < scene.triangles.size(); i += 7) points.push_back(scene.triangles[i].v0);
