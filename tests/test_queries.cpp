@@ -341,6 +341,25 @@ TEST(Queries, ContainmentIsRepeatableAndIndependentOfThreads) {
     EXPECT_GT(inside, 0u);
 }
 
+TEST(Queries, LargeContainmentBatchOverDegenerateTrianglesIsOutside) {
+    // Zero-area triangles only (never crossed), in a flat box: the coherent order's grid has zero
+    // extent on every axis.
+    Scene scene;
+    scene.name = "degenerate";
+    for (int i = 0; i < 64; ++i) {
+        const Vec3 p{1.0f, 2.0f, 3.0f};
+        scene.triangles.push_back({p, p, p});
+    }
+    const RayQueries queries(scene.triangles, spacebvh::build(scene, config_for("binned")));
+    std::vector<Vec3> points;
+    SplitMix64 rng(3);
+    for (int i = 0; i < 5000; ++i) points.push_back({4 * rng.uniform() - 1, 4 * rng.uniform(), 4 * rng.uniform() + 1});
+    points.push_back({1.0f, 2.0f, 3.0f});
+    std::vector<uint8_t> inside(points.size(), 1);
+    queries.contains(points, inside);
+    EXPECT_EQ(std::count(inside.begin(), inside.end(), uint8_t(1)), 0);
+}
+
 #ifdef SPACEBVH_HAVE_GMP
 
 // A set of rays with the reference's answers (computed once, in parallel, for every tree checked).

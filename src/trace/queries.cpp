@@ -767,8 +767,8 @@ std::vector<uint32_t> coherent_order(const AABB& bounds, size_t n, const RayAt& 
             const Vec3 org = ray_at(i).org;
             uint32_t code = 0;
             for (int a = 0; a < 3; ++a) {
-                const float x = (org[a] - low[a]) * scale[a];  // finite: points are checked first
-                const uint32_t cell = x <= 0.0f ? 0u : x >= float(kCells - 1) ? kCells - 1 : uint32_t(x);
+                const float x = (org[a] - low[a]) * scale[a];  // NaN only for an empty box: cell 0
+                const uint32_t cell = !(x > 0.0f) ? 0u : x >= float(kCells - 1) ? kCells - 1 : uint32_t(x);
                 for (int bit = 0; bit < kBits; ++bit) code |= ((cell >> bit) & 1u) << (3 * bit + a);
             }
             key[i] = uint16_t(code);
@@ -920,7 +920,7 @@ void RayQueries::contains(std::span<const Vec3> points, std::span<uint8_t> out) 
     check_sizes(points.size(), out.size(), "contains");
     for (const Vec3& p : points) containment_ray(p);
     const size_t n = points.size();
-    if (n < kOrderedBatch || n > std::numeric_limits<uint32_t>::max()) {
+    if (n < kOrderedBatch || n > std::numeric_limits<uint32_t>::max() || layout_->nodes.empty()) {
         for_chunks(n, [&](size_t begin, size_t end) {
             std::vector<uint32_t> scratch;
             for (size_t i = begin; i < end; ++i) out[i] = count_crossings(*layout_, containment_ray(points[i]), scratch) % 2;
