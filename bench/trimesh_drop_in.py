@@ -56,19 +56,27 @@ def timed(function, *args, **kwargs):
     return time.perf_counter() - start, result
 
 
+def timed_with_cpu(function, *args, **kwargs):
+    """Wall seconds, CPU seconds of this process (every thread) and the result."""
+    start, cpu_start = time.perf_counter(), time.process_time()
+    result = function(*args, **kwargs)
+    return time.perf_counter() - start, time.process_time() - cpu_start, result
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rays", type=int, default=1_000_000)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
     parser.add_argument("--builder", default="binned")
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each query pair; medians are printed")
     args = parser.parse_args()
 
     import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
     import embreex
 
     print(f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "
-          f"{args.rays} rays, spacebvh threads={args.threads}, builder {args.builder}")
+          f"{args.rays} rays, spacebvh threads={args.threads}, builder {args.builder}, medians of {args.repeat} runs")
     rows = []
     for name in args.scenes:
         path = SCENES / name / f"{name}.obj"
@@ -95,23 +103,30 @@ def main():
             ("contains_points", lambda m: m.ray.contains_points(points)),
         ]
         for label, query in queries:
-            t_theirs, a = timed(query, theirs)
-            t_ours, b = timed(query, ours)
+            # Side by side, `repeat` times; each figure below is the median over the runs.
+            runs = []
+            for _ in range(args.repeat):
+                t_theirs, cpu_theirs, a = timed_with_cpu(query, theirs)
+                t_ours, cpu_ours, b = timed_with_cpu(query, ours)
+                runs.append((t_theirs, t_ours, t_theirs / t_ours, cpu_theirs / cpu_ours))
+            t_theirs, t_ours, ratio, cpu_ratio = np.median(np.array(runs), axis=0)
             if label == "intersects_location":
                 agree = np.mean(np.bincount(a[1], minlength=args.rays) == np.bincount(b[1], minlength=args.rays))
                 hits = f", hits {len(a[1])} vs {len(b[1])}"
             else:
                 agree = np.mean(np.asarray(a) == np.asarray(b))
                 hits = ""
-            ratio = t_theirs / t_ours
-            rows.append((name, label, args.rays / t_theirs / 1e6, args.rays / t_ours / 1e6, ratio))
+            rows.append((name, label, args.rays / t_theirs / 1e6, args.rays / t_ours / 1e6, ratio, cpu_ratio))
             print(f"  {label:20s} embree {args.rays / t_theirs / 1e6:7.3f} Mrays/s ({t_theirs:6.2f} s)   "
-                  f"spacebvh {args.rays / t_ours / 1e6:7.3f} Mrays/s ({t_ours:6.2f} s)   ratio {ratio:6.1f}x   "
-                  f"same answer {100 * agree:.2f} %{hits}")
+                  f"spacebvh {args.rays / t_ours / 1e6:7.3f} Mrays/s ({t_ours:6.2f} s)   "
+                  f"ratio {ratio:6.1f}x (cpu {cpu_ratio:5.1f}x)   same answer {100 * agree:.2f} %{hits}", flush=True)
 
-    print("\nscene           query                 embree Mrays/s  spacebvh Mrays/s  ratio")
-    for name, label, theirs, ours, ratio in rows:
-        print(f"{name:15s} {label:20s} {theirs:15.3f} {ours:17.3f} {ratio:6.1f}x")
+    # The CPU ratio is the work ratio (trimesh+embreex runs on one thread, spacebvh on `threads`): on a
+    # machine with idle cores for every thread, the wall ratio approaches it times the thread count; on
+    # a machine loaded past its cores the threads share the same cores and the wall ratio falls to it.
+    print("\nscene           query                 embree Mrays/s  spacebvh Mrays/s  ratio  cpu ratio")
+    for name, label, theirs, ours, ratio, cpu_ratio in rows:
+        print(f"{name:15s} {label:20s} {theirs:15.3f} {ours:17.3f} {ratio:6.1f}x {cpu_ratio:6.1f}x")
 
 
 if __name__ == "__main__":

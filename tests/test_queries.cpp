@@ -317,9 +317,12 @@ TEST(Queries, ContainmentIsRepeatableAndIndependentOfThreads) {
     for (const Triangle& t : scene.triangles) bounds.extend(t.bounds());
     std::vector<Vec3> points;
     SplitMix64 rng(7);
+    // A batch large enough to be walked in coherent order, from a box a fifth larger than the mesh's
+    // (points outside it are clamped to the border cells of that order).
     for (int i = 0; i < 20000; ++i) {
         const Vec3 e = bounds.extent();
-        points.push_back({bounds.lo.x + e.x * rng.uniform(), bounds.lo.y + e.y * rng.uniform(), bounds.lo.z + e.z * rng.uniform()});
+        auto coordinate = [&](float lo, float extent) { return lo + extent * (1.2f * rng.uniform() - 0.1f); };
+        points.push_back({coordinate(bounds.lo.x, e.x), coordinate(bounds.lo.y, e.y), coordinate(bounds.lo.z, e.z)});
     }
     // Mesh vertices too: points on the surface.
     for (size_t i = 0; i < scene.triangles.size(); i += 7) points.push_back(scene.triangles[i].v0);
@@ -336,6 +339,25 @@ TEST(Queries, ContainmentIsRepeatableAndIndependentOfThreads) {
         inside += first[i];
     }
     EXPECT_GT(inside, 0u);
+}
+
+TEST(Queries, LargeContainmentBatchOverDegenerateTrianglesIsOutside) {
+    // Zero-area triangles only (never crossed), in a flat box: the coherent order's grid has zero
+    // extent on every axis.
+    Scene scene;
+    scene.name = "degenerate";
+    for (int i = 0; i < 64; ++i) {
+        const Vec3 p{1.0f, 2.0f, 3.0f};
+        scene.triangles.push_back({p, p, p});
+    }
+    const RayQueries queries(scene.triangles, spacebvh::build(scene, config_for("binned")));
+    std::vector<Vec3> points;
+    SplitMix64 rng(3);
+    for (int i = 0; i < 5000; ++i) points.push_back({4 * rng.uniform() - 1, 4 * rng.uniform(), 4 * rng.uniform() + 1});
+    points.push_back({1.0f, 2.0f, 3.0f});
+    std::vector<uint8_t> inside(points.size(), 1);
+    queries.contains(points, inside);
+    EXPECT_EQ(std::count(inside.begin(), inside.end(), uint8_t(1)), 0);
 }
 
 #ifdef SPACEBVH_HAVE_GMP
@@ -362,6 +384,8 @@ void check_against_reference(const RayQueries& queries, const ReferenceCase& c, 
     queries.count_hits(rays, counts);
     std::vector<QueryHit> firsts(rays.size());
     queries.first_hits(rays, firsts);
+    std::vector<uint32_t> first_ids(rays.size());
+    queries.first_hit_ids(rays, first_ids);
     std::vector<uint8_t> anys(rays.size());
     queries.any_hits(rays, anys);
     size_t wrong = 0, hits = 0;
@@ -373,6 +397,7 @@ void check_against_reference(const RayQueries& queries, const ReferenceCase& c, 
         bool ok = bool(result);
         ok = ok && counts[i] == reference.size() && bool(anys[i]) == !reference.empty();
         ok = ok && firsts[i].is_hit() == !reference.empty() && (reference.empty() || firsts[i].primitive == ours[0].primitive);
+        ok = ok && first_ids[i] == firsts[i].primitive && (reference.empty() || firsts[i].t == ours[0].t);
         if (!ok && ++wrong <= 5) ADD_FAILURE() << c.what << "/" << tree << " ray " << i << ": " << result.message() << " count " << counts[i];
     }
     EXPECT_EQ(wrong, 0u) << c.what << "/" << tree << ": " << rays.size() << " rays, " << hits << " reference hits";

@@ -74,6 +74,9 @@ public:
 
     // Batches (rays.size() == out.size(); misses of first_hits have primitive == kInvalidIndex).
     void first_hits(std::span<const Ray> rays, std::span<QueryHit> out) const;
+    // The triangle of each first crossing only (kInvalidIndex on a miss): first_hits without the
+    // distance, barycentrics and point.
+    void first_hit_ids(std::span<const Ray> rays, std::span<uint32_t> out) const;
     void any_hits(std::span<const Ray> rays, std::span<uint8_t> out) const;
     HitLists all_hits(std::span<const Ray> rays, size_t max_hits = kNoHitLimit) const;
     void count_hits(std::span<const Ray> rays, std::span<uint32_t> out) const;

@@ -72,6 +72,10 @@ class RayQueries:
         self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
     ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """The first crossing of each ray: (t, primitive (-1 on a miss), u, v, points (k, 3) in the caller's frame)."""
+    def first_primitive(
+        self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
+    ) -> npt.NDArray[np.int64]:
+        """The triangle of each first crossing (-1 on a miss), as first()[1]."""
     def any(
         self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
     ) -> npt.NDArray[np.bool_]:
@@ -85,11 +89,12 @@ class RayQueries:
         *,
         max_hits: Optional[int] = None,
         points: bool = True,
+        details: bool = True,
         threads: Optional[int] = None,
     ) -> Tuple[
         npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]
     ]:
-        """Every crossing sorted by ray then t: (index_ray, primitive, t, u, v, points (m, 3))."""
+        """Every crossing sorted by ray then t: (index_ray, primitive, t, u, v (empty when details=False), points (m, 3))."""
     def count(
         self, origins: _Rows, directions: _Rows, tmin: _PerRay = 0.0, tmax: _PerRay = ..., *, threads: Optional[int] = None
     ) -> npt.NDArray[np.int64]:

@@ -116,7 +116,7 @@ class RayMeshIntersector:
             return empty, empty.copy()
         if multiple_hits:
             index_ray, index_tri, _t, _u, _v, locations = queries.all(
-                origins, directions, max_hits=max(int(max_hits), 0), points=return_locations
+                origins, directions, max_hits=max(int(max_hits), 0), points=return_locations, details=False
             )
         else:
             _t, primitive, _u, _v, points = queries.first(origins, directions)
@@ -141,7 +141,7 @@ class RayMeshIntersector:
         queries = self.queries
         if queries is None or len(origins) == 0:
             return np.full(len(origins), -1, dtype=np.int64)
-        return queries.first(origins, directions)[1]
+        return queries.first_primitive(origins, directions)
 
     def intersects_any(self, ray_origins: Any, ray_directions: Any, **kwargs: Any) -> np.ndarray:
         """Whether each ray crosses the surface: ``(n,)`` bool."""
@@ -162,6 +162,8 @@ class RayMeshIntersector:
             return result
         bounds = np.asarray(self.mesh.bounds, dtype=np.float64)
         inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
+        if inside_box.all():
+            return queries.contains(points)
         if inside_box.any():
             result[inside_box] = queries.contains(points[inside_box])
         return result

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: MIT
 // Exact multi-hit queries (include/spacebvh/queries.hpp) on NumPy rays: every crossing, crossing
 // counts, first and any crossing, and containment, each crossing of a surface reported once.
+#include <atomic>
 #include <optional>
 
 #include <pybind11/stl.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "bindings.hpp"
 #include "spacebvh/queries.hpp"
@@ -55,6 +58,22 @@ py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py:
     return py::make_tuple(t, primitive, u, v, points);
 }
 
+py::array_t<int64_t> first_primitives(const PyQueries& self, const py::handle& origins, const py::handle& directions,
+                                      const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    py::array_t<int64_t> primitive(py::ssize_t(rays.size()));
+    int64_t* id_out = primitive.mutable_data();
+    without_gil(threads, [&] {
+        std::vector<uint32_t> ids(rays.size());
+        self.queries->first_hit_ids(rays, ids);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
+            for (size_t i = range.begin(); i < range.end(); ++i) id_out[i] = ids[i] == kInvalidIndex ? -1 : int64_t(ids[i]);
+        });
+    });
+    return primitive;
+}
+
 py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                            const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
@@ -65,31 +84,36 @@ py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, con
 }
 
 py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
-                   const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted, std::optional<int> threads_arg) {
+                   const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted, bool details_wanted,
+                   std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
     if (max_hits && *max_hits < 0) throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     HitLists lists;
     without_gil(threads, [&] { lists = self.queries->all_hits(rays, max_hits ? size_t(*max_hits) : kNoHitLimit); });
-    const py::ssize_t m = py::ssize_t(lists.hits.size());
+    const py::ssize_t m = py::ssize_t(lists.hits.size()), details = details_wanted ? m : 0;
     py::array_t<int64_t> index_ray(m), primitive(m);
-    py::array_t<double> t(m), u(m), v(m);
+    py::array_t<double> t(details), u(details), v(details);
     py::array_t<double> points(std::vector<py::ssize_t>{points_wanted ? m : 0, 3});
     int64_t *ray_out = index_ray.mutable_data(), *id_out = primitive.mutable_data();
     double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(), *p_out = points.mutable_data();
-    {
-        py::gil_scoped_release unlocked;
-        for (size_t r = 0; r < rays.size(); ++r)
-            for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
-                const QueryHit& hit = lists.hits[k];
-                ray_out[k] = int64_t(r);
-                id_out[k] = int64_t(hit.primitive);
-                t_out[k] = hit.t;
-                u_out[k] = hit.u;
-                v_out[k] = hit.v;
-                if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
-            }
-    }
+    // Rays in blocks across the threads: each block writes the disjoint range of its rays' hits.
+    without_gil(threads, [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
+            for (size_t r = range.begin(); r < range.end(); ++r)
+                for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
+                    const QueryHit& hit = lists.hits[k];
+                    ray_out[k] = int64_t(r);
+                    id_out[k] = int64_t(hit.primitive);
+                    if (details_wanted) {
+                        t_out[k] = hit.t;
+                        u_out[k] = hit.u;
+                        v_out[k] = hit.v;
+                    }
+                    if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
+                }
+        });
+    });
     return py::make_tuple(index_ray, primitive, t, u, v, points);
 }
 
@@ -112,16 +136,25 @@ py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, 
     std::vector<uint8_t> answers(points.size());
     const Frame& frame = self.scene.frame;
     without_gil(threads, [&] {
+        // In blocks across the threads; the first row that is not finite is the one named.
+        std::atomic<size_t> first_bad{points.size()};
         rows.visit([&](auto read) {
-            for (size_t i = 0; i < points.size(); ++i) {
-                for (int axis = 0; axis < 3; ++axis) {
-                    const double value = read(i, axis);
-                    if (!std::isfinite(value))
-                        throw Error("points: row " + std::to_string(i) + " is not finite");
-                    points[i][axis] = frame.to_local(value, axis);
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
+                for (size_t i = range.begin(); i < range.end(); ++i) {
+                    for (int axis = 0; axis < 3; ++axis) {
+                        const double value = read(i, axis);
+                        if (!std::isfinite(value)) {
+                            size_t seen = first_bad.load();
+                            while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+                            }
+                            return;
+                        }
+                        points[i][axis] = frame.to_local(value, axis);
+                    }
                 }
-            }
+            });
         });
+        if (first_bad.load() != points.size()) throw Error("points: row " + std::to_string(first_bad.load()) + " is not finite");
         self.queries->contains(points, answers);
     });
     return answers_as_array(answers);
@@ -159,16 +192,22 @@ void bind_queries(py::module_& m) {
               "The first crossing of each ray: (t float64 (inf on a miss), primitive int64 (-1 on a miss), u, v float64 "
               "barycentrics of the second and third corners, points (k, 3) float64 in the caller's frame (NaN on a miss)).")
                  .c_str())
+        .def("first_primitive", &first_primitives, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+             (std::string(kRaysDoc) +
+              "The triangle of each first crossing, as first()[1] (int64, -1 on a miss), without the distances, "
+              "barycentrics and points.")
+                 .c_str())
         .def("any", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              (std::string(kRaysDoc) + "Whether each ray crosses the mesh: a bool array.").c_str())
         .def("all", &all_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("max_hits") = py::none(),
-             py::arg("points") = true, py::arg("threads") = py::none(),
+             py::arg("points") = true, py::arg("details") = true, py::arg("threads") = py::none(),
              (std::string(kRaysDoc) +
               "Every crossing, sorted by ray and then by t (ties by triangle), at most max_hits per ray (the nearest): "
-              "(index_ray int64, primitive int64, t, u, v float64, points (m, 3) float64 in the caller's frame, or "
-              "(0, 3) when points=False).")
+              "(index_ray int64, primitive int64, t, u, v float64 (empty when details=False), points (m, 3) float64 "
+              "in the caller's frame, or (0, 3) when points=False).")
                  .c_str())
         .def("count", &count_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),

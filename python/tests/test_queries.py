@@ -124,6 +124,11 @@ def check_all_hits(queries, triangles, origins, directions, tmin=0.0, tmax=math.
     counts = queries.count(origins, directions, tmin, tmax)
     first_t, first_primitive, _, _, _ = queries.first(origins, directions, tmin, tmax)
     anys = queries.any(origins, directions, tmin, tmax)
+    assert np.array_equal(queries.first_primitive(origins, directions, tmin, tmax), first_primitive)
+    # Without t, u, v: the same crossings and points.
+    lean = queries.all(origins, directions, tmin, tmax, details=False)
+    assert np.array_equal(lean[0], index_ray) and np.array_equal(lean[1], primitive) and np.array_equal(lean[5], points)
+    assert lean[2].shape == lean[3].shape == lean[4].shape == (0,)
     assert np.all(np.diff(index_ray) >= 0)
     for r in range(len(origins)):
         expected = reference_hits(triangles, origins[r], directions[r], tmin, tmax)
@@ -250,6 +255,11 @@ def test_bad_input_is_an_error():
         queries.all([[0, 0, 0], [1, 1, 1]], [[0, 0, 1], [0, 0, 1], [0, 0, 1]])
     with pytest.raises((spacebvh.Error, TypeError)):
         queries.contains([[0, 0, float("nan")]])
+    # The first bad row is named, wherever the rows' blocks are read.
+    points = np.zeros((100_000, 3))
+    points[[70_000, 40_000], 1] = np.inf
+    with pytest.raises(spacebvh.Error, match="points: row 40000 is not finite"):
+        queries.contains(points)
     with pytest.raises(spacebvh.Error):
         queries.all([[0, 0, 0]], [[0, 0, 1]], max_hits=-1)
 
