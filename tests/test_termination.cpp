@@ -4,6 +4,7 @@
 // for 1 and 2 threads, the plain tree where no node is met by enough segments, and clear errors.
 #include <gtest/gtest.h>
 
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 #include <cstring>
@@ -93,4 +94,25 @@ TEST(TerminationAwareBuild, BadSegmentsAndSettingsThrow) {
     options.termination.candidates = 4;
     options.termination.shrinkage = -1.0f;
     EXPECT_THROW((void)spacebvh::build(scene, options), Error);
+}
+
+// The command line: `rays --kind bounce|area`, `--termination-rays` on build and `@trays=N` in compare
+// (answers checked by the arbiter), and clear errors for what does not apply.
+TEST_F(Cli, SampleRaysAndTerminationRays) {
+    for (const char* kind : {"bounce", "area"}) {
+        const CliResult r = run(std::string("rays builtin:interior --kind ") + kind + " --count 700 -o s.bin");
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_EQ(read_ray_file(path("s.bin")).size(), 700u) << kind;
+    }
+    const CliResult build = run("build builtin:soup --builder cbvh --termination-rays 2000 --no-epo");
+    ASSERT_EQ(build.exit_code, 0) << build.output;
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tcand=2;tn0=8' --embree medium "
+                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                                         3, rows));
+    EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("spatial@trays=2000", 0), 0u) << rows[1];
+    for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
+    expect_clean_failure("build builtin:soup --builder embree-high --termination-rays 100 --no-epo", {"termination-rays"});
+    expect_clean_failure("build builtin:soup --termination-rays 100 --termination-candidates 0 --no-epo", {"termination candidates"});
+    expect_clean_failure("rays builtin:soup --kind camera -o r.bin", {"camera"});
 }

@@ -303,6 +303,8 @@ size_t peak_rss_bytes() {
 Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
     if (is_embree_tree(options.builder) && (options.lookahead.depth > 0 || options.lookahead.top_share > 0))
         throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
+    if (is_embree_tree(options.builder) && options.termination_rays > 0)
+        throw Error("--termination-rays applies to our builders, not to Embree's tree '" + options.builder + "'");
     const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
     Bvh bvh;
     if (is_embree_tree(options.builder)) {

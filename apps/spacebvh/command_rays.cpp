@@ -46,6 +46,8 @@ void add_rays_command(CLI::App& app) {
             std::printf("wrote %zu %s rays to %s\n", rays.size(), to_string(sample), options->output.c_str());
             return;
         }
+        if (options->kind != "random" && options->kind != "primary" && options->kind != "diffuse")
+            throw Error("--kind: unknown ray kind '" + options->kind + "' (expected random, primary, diffuse, bounce or area)");
         const RayKind kind = parse_ray_kind(options->kind);
         const Scene scene = load_scene(options->source, transform);
         RaySetParameters parameters;
