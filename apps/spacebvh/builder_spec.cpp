@@ -31,8 +31,11 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "sweep") spec.options.spatial.exact_sweep = parse_unsigned(value, "sweep") != 0;
             else if (key == "samples") spec.options.spatial.sweep_interior_samples = parse_unsigned(value, "samples");
             else if (key == "optimize") spec.options.reinsertion.iterations = parse_unsigned(value, "optimize");
+            else if (key == "trays") spec.options.termination_rays = parse_unsigned(value, "trays");
+            else if (key == "tn0") spec.options.termination.shrinkage = parse_float_or_inf(value, "tn0");
+            else if (key == "tcand") spec.options.termination.candidates = parse_unsigned(value, "tcand");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize)");
+                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize, trays, tn0, tcand)");
         }
         spec.options.validate();
     }

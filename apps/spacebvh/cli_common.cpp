@@ -3,6 +3,7 @@
 
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/sample_rays.hpp"
 #include "spacebvh/trace.hpp"
 
 #include <sys/resource.h>
@@ -18,6 +19,9 @@
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::cli {
+
+// The seed of the termination-aware build's bounce rays: fixed, so a recipe names one tree.
+constexpr uint64_t kTerminationSeed = 0x7E55A11;
 
 using namespace spacebvh::tools;
 
@@ -99,6 +103,17 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--sweep-samples", sweep_samples,
                        "spatial sweep: positions sampled inside the intervals next to the best event planes (0 = events only)")
         ->capture_default_str();
+    command.add_option("--termination-rays", termination_rays,
+                       "termination-aware split choice: trace this many bounce rays on a quick tree and choose splits "
+                       "by the share of their segments (each ending at its first hit) that meets each child, where "
+                       "at least 8 reach a node (0 = off)")
+        ->capture_default_str();
+    command.add_option("--termination-shrinkage", termination_shrinkage,
+                       "n_0 of the blend: a node met by n segments weighs the sampled cost n / (n + n_0)")
+        ->capture_default_str();
+    command.add_option("--termination-candidates", termination_candidates,
+                       "cheapest splits per axis and search space the termination-aware cost chooses among")
+        ->capture_default_str();
     command.add_flag("--optimize", optimize,
                      "after the build, move subtrees to where they lower the tree SAH (reinsertion, Bittner et al. "
                      "2013); leaves stay as built; also as a builder name suffix: binned+opt");
@@ -154,6 +169,9 @@ TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
     options.hooks.cancel = interrupt_flag();
     options.spatial.exact_sweep = spatial_sweep;
     options.spatial.sweep_interior_samples = sweep_samples;
+    options.termination_rays = termination_rays;
+    options.termination.shrinkage = termination_shrinkage;
+    options.termination.candidates = termination_candidates;
     const bool iterations_given = optimize_iterations_option && optimize_iterations_option->count() > 0;
     if (optimize || optimized_name || iterations_given) {
         if (optimize_iterations == 0) throw Error("--optimize-iterations must be at least 1");
@@ -285,10 +303,20 @@ size_t peak_rss_bytes() {
 Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
     if (is_embree_tree(options.builder) && (options.lookahead.depth > 0 || options.lookahead.top_share > 0))
         throw Error("--lookahead applies to our builders, not to Embree's tree '" + options.builder + "'");
+    if (is_embree_tree(options.builder) && options.termination_rays > 0)
+        throw Error("--termination-rays applies to our builders, not to Embree's tree '" + options.builder + "'");
     const InterruptScope interrupts;  // our builders poll the flag; Embree's finish, then we stop
     Bvh bvh;
-    if (is_embree_tree(options.builder)) bvh = build_embree_tree(scene, options.builder, options);
-    else bvh = spacebvh::build(scene, options);  // our presets (optimised there); reports an unknown name
+    if (is_embree_tree(options.builder)) {
+        bvh = build_embree_tree(scene, options.builder, options);
+    } else if (options.termination_rays > 0) {
+        BuildConfig config = options;
+        const Tracer quick(scene, spacebvh::build(scene, Quality::fast));
+        config.termination.segments = termination_segments(scene, quick, options.termination_rays, kTerminationSeed);
+        bvh = spacebvh::build(scene, config);
+    } else {
+        bvh = spacebvh::build(scene, options);  // our presets (optimised there); reports an unknown name
+    }
     throw_if_interrupted();
     return bvh;
 }

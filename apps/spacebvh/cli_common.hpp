@@ -35,6 +35,8 @@ struct SceneOptions {
 // A tree to build: one of our presets, or one of Embree's trees ("embree-high"), with its configuration.
 struct TreeRecipe : BuildConfig {
     std::string builder;
+    // Bounce rays traced on a quick tree to fill termination.segments before the build (0 = off).
+    uint32_t termination_rays = 0;
 };
 
 struct BuildCliOptions {
@@ -54,6 +56,9 @@ struct BuildCliOptions {
     float lookahead_top = 0;
     bool spatial_sweep = false;
     uint32_t sweep_samples = 0;
+    uint32_t termination_rays = 0;
+    float termination_shrinkage = 32.0f;
+    uint32_t termination_candidates = 4;
     bool optimize = false;  // reinsertion optimisation after the build
     uint32_t optimize_iterations = kDefaultReinsertionIterations;
     const CLI::Option* optimize_iterations_option = nullptr;  // given: implies --optimize

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/cost_model.hpp"
@@ -107,6 +108,19 @@ struct ReinsertionConfig {
     uint32_t iterations = 0;  // 0 = off; at most kMaxReinsertionIterations
 };
 
+// Termination-aware split choice: where enough sample rays reach a node, its split is chosen among the
+// search spaces' cheapest candidates by a cost that prices each child by the share of the node's
+// sample segments that meet it (Bittner & Havran 2009, "RDH"), each segment ending where its ray
+// stops (its first hit), so children behind the surfaces rays hit cost nothing; blended with the
+// cost model's split cost by w = n / (n + shrinkage) for a node met by n segments. The segments are
+// data: the builder never traces (spacebvh::tools::termination_segments makes them).
+struct TerminationConfig {
+    std::vector<Ray> segments;  // from tmin to tmax (where the ray stops); empty = off
+    float shrinkage = 32.0f;    // n_0 of the blend, >= 0
+    uint32_t min_rays = 8;      // nodes met by fewer segments keep the cost model's choice (>= 1)
+    uint32_t candidates = 4;    // the cheapest splits per axis and search space compared (1..16)
+};
+
 struct BuildHooks {
     // Called now and then with the fraction of the work done (0..1), from any thread. May be empty.
     std::function<void(double)> progress;
@@ -126,6 +140,7 @@ struct BuildConfig {
     GridConfig grid;
     LookaheadConfig lookahead;
     ReinsertionConfig reinsertion;
+    TerminationConfig termination;
     BuildHooks hooks;
 
     // The preset with its default overlap penalty C_o.

@@ -55,6 +55,7 @@ Bvh build(const MeshView& mesh, const BuildConfig& config) {
     driver.progress = progress;
     if (optimizing && progress) driver.progress = [progress](double fraction) { progress(0.5 * fraction); };
     driver.cancel = config.hooks.cancel;
+    if (!config.termination.segments.empty()) driver.termination = &config.termination;
     const float gate = config.spatial.gate_alpha >= 0.0f ? config.spatial.gate_alpha : preset.spatial_gate_alpha;
     builders::TopDownBuilder builder(config.cost, {config.limits.max_leaf_size, config.limits.max_depth},
                                      builders::make_search_spaces(spaces, triangles, config, preset.allow_unsplitting, gate),

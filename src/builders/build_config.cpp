@@ -60,6 +60,17 @@ BuildConfig BuildConfig::for_quality(Quality quality) {
 void BuildConfig::validate() const {
     require(uint32_t(preset) < builders::kPresetCount, "unknown preset " + std::to_string(uint32_t(preset)));
     cost.validate();
+    require(termination.shrinkage >= 0.0f && termination.shrinkage < kInfinity,
+            "termination shrinkage must be finite and >= 0, got " + std::to_string(termination.shrinkage));
+    require(termination.min_rays >= 1, "termination min rays must be at least 1");
+    require(termination.candidates >= 1 && termination.candidates <= 16,
+            "termination candidates must be in [1, 16], got " + std::to_string(termination.candidates));
+    for (size_t i = 0; i < termination.segments.size(); ++i) {
+        const Ray& segment = termination.segments[i];
+        require(is_finite(segment.org) && is_finite(segment.dir) && !(segment.dir == Vec3(0.0f)) &&
+                    segment.tmin >= 0.0f && !(segment.tmax < segment.tmin),
+                "termination segment " + std::to_string(i) + " has a non-finite origin or direction, a zero direction or an empty t range");
+    }
     require(limits.max_leaf_size >= 1 && limits.max_leaf_size <= (1u << 20),
             "max leaf size must be in [1, 1048576], got " + std::to_string(limits.max_leaf_size));
     require(limits.max_depth >= 1 && limits.max_depth <= 1024,

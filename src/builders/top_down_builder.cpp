@@ -11,6 +11,7 @@
 #include "builders/lookahead.hpp"
 #include "builders/object_sweep_split_finder.hpp"
 #include "builders/partition.hpp"
+#include "builders/termination_term.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh::builders {
@@ -34,6 +35,7 @@ struct TopDownBuilder::Impl {
     const SplitSearch& search;
     const Lookahead& lookahead;
     const Lookahead& whole_subtree_lookahead;  // for nodes of at least `top_node_references`
+    const TerminationTerm& termination;        // may be disabled (no segments)
     size_t top_node_references = 0;            // 0: no node looks ahead to the leaves
     std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
     // Centroid orders for the object sweep, kept when a search space reads them: then every node's
@@ -57,8 +59,9 @@ struct TopDownBuilder::Impl {
             builder.options_.progress(std::min(1.0, double(done) / double(input_count)));
     }
 
+    // `rays`: the termination segments that meet the node (empty when the term is off).
     void build_subtree(uint32_t slot, uint32_t begin, uint32_t count, uint32_t capacity, const ReferenceSummary& summary,
-                       uint32_t depth) {
+                       uint32_t depth, const std::vector<uint32_t>& rays) {
         SlotNode& node = slots[slot];
         node.bounds = summary.bounds;
         node.begin = begin;
@@ -79,6 +82,9 @@ struct TopDownBuilder::Impl {
             split = lookahead.choose(storage, count, summary, depth).split;
         else
             split = search.greedy_decision(storage.first(count), summary, capacity, centroid_orders(begin, count));
+        // The term changes which split a node takes, never whether it is a leaf.
+        if (split && termination.enabled() && builder.options_.lookahead_depth == 0)
+            split = termination.choose(search, storage.first(count), summary, capacity, *split, rays);
         if (!split) return make_leaf(node);
         const SplitKind kind = split->kind;  // apply may fall back to the median split
         const std::optional<ChildRanges> applied = search.apply(storage, count, *split, summary);
@@ -90,13 +96,18 @@ struct TopDownBuilder::Impl {
         const ReferenceSummary right_summary = summarize({references.data() + right_begin, children.right_count});
         node.left_slot = slot + 1;
         node.right_slot = slot + 2 * children.left_capacity;
+        std::vector<uint32_t> left_rays, right_rays;
+        if (!rays.empty()) {
+            left_rays = termination.meeting(left_summary.bounds, &rays);
+            right_rays = termination.meeting(right_summary.bounds, &rays);
+        }
 
         auto build_left = [&] {
-            build_subtree(slot + 1, begin, children.left_count, children.left_capacity, left_summary, depth + 1);
+            build_subtree(slot + 1, begin, children.left_count, children.left_capacity, left_summary, depth + 1, left_rays);
         };
         auto build_right = [&] {
             build_subtree(node.right_slot, right_begin, children.right_count, children.right_capacity, right_summary,
-                          depth + 1);
+                          depth + 1, right_rays);
         };
         if (count >= kParallelSubtreeThreshold) {
             tbb::parallel_invoke(build_left, build_right);
@@ -256,7 +267,8 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
         options_.lookahead_top_share > 0 && search_spaces_.size() > 1
             ? std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))))
             : 0;
-    Impl impl{*this, search, lookahead, whole_subtree_lookahead, top_node_references, std::move(references)};
+    const TerminationTerm termination(options_.termination ? *options_.termination : TerminationConfig{});
+    Impl impl{*this, search, lookahead, whole_subtree_lookahead, termination, top_node_references, std::move(references)};
     impl.input_count = count;
     impl.references.resize(capacity);
     impl.keeps_orders = search.reads_centroid_orders();
@@ -265,7 +277,8 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
         Impl::for_each_order(uint32_t(count), [&](int axis) { sort_in_centroid_order({impl.order_data(axis), count}, axis); });
     }
     impl.slots.resize(2 * capacity - 1);
-    impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0);
+    const std::vector<uint32_t> root_rays = termination.enabled() ? termination.meeting(root.bounds, nullptr) : std::vector<uint32_t>{};
+    impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0, root_rays);
 
     bvh.nodes.reserve(2 * capacity - 1);
     bvh.primitives.reserve(capacity);

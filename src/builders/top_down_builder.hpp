@@ -15,6 +15,7 @@
 #include "builders/reference.hpp"
 #include "builders/split.hpp"
 #include "builders/split_search.hpp"
+#include "spacebvh/build.hpp"
 #include "spacebvh/bvh.hpp"
 
 namespace spacebvh::builders {
@@ -27,6 +28,7 @@ struct DriverOptions {
                                                 // ahead to the leaves (0 = none)
     std::function<void(double)> progress;       // fraction of references that reached a leaf
     const std::atomic<bool>* cancel = nullptr;  // polled between nodes; when set, build() throws Cancelled
+    const TerminationConfig* termination = nullptr;  // the termination-aware split choice; null = off
 };
 
 class TopDownBuilder {
