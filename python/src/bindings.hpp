@@ -9,6 +9,7 @@
 
 #include <tbb/task_arena.h>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -51,12 +52,24 @@ inline void check_threads(int threads) {
     if (threads < 0) throw Error("threads must be >= 0 (0 = every core), not " + std::to_string(threads));
 }
 
-// Runs `work` in an arena of `threads` oneTBB threads (0: the default, every core). Call without the GIL.
+// The calling thread's arena of `threads` oneTBB threads (0: the default, every core), made on the
+// thread's first call with that count and kept for the thread's life. An arena made and destroyed on
+// every call, from several Python threads at once, makes the process grow without bound
+// (bench/python_soak.py shows it); a kept arena also saves its setup on every call.
+inline tbb::task_arena& arena_of_this_thread(int threads) {
+    thread_local std::map<int, std::unique_ptr<tbb::task_arena>> arenas;
+    std::unique_ptr<tbb::task_arena>& arena = arenas[threads];
+    // A copy of task_arena::automatic, not a reference to it: the library does not export the constant.
+    const int concurrency = threads == 0 ? int(tbb::task_arena::automatic) : threads;
+    if (!arena) arena = std::make_unique<tbb::task_arena>(concurrency);
+    return *arena;
+}
+
+// Runs `work` in the calling thread's arena of `threads` oneTBB threads. Call without the GIL.
 template <typename Work>
 void in_arena(int threads, Work&& work) {
     check_threads(threads);
-    tbb::task_arena arena(threads == 0 ? tbb::task_arena::automatic : threads);
-    arena.execute(std::forward<Work>(work));
+    arena_of_this_thread(threads).execute(std::forward<Work>(work));
 }
 
 // The same, releasing the GIL for the duration.
