@@ -29,6 +29,9 @@ struct DriverOptions {
     const std::atomic<bool>* cancel = nullptr;  // polled between nodes; when set, build() throws Cancelled
 };
 
+// Bytes per node slot; the driver keeps 2 * capacity - 1 slots (memory_estimate.cpp counts them).
+inline constexpr size_t kSlotBytes = 36;
+
 class TopDownBuilder {
 public:
     TopDownBuilder(CostModel cost, BuildLimits limits, std::vector<std::unique_ptr<SplitFinder>> search_spaces,
