@@ -8,7 +8,7 @@
 #
 #   bash bench/scale.sh [OUT_DIR]
 #   env: SIZES="1e5 1e6 1e7"  BUILDERS="binned cbvh spatial embree-medium embree-high"
-#        BIG="binned:5e7" (extra builder:size runs)  THREADS  SPACEBVH_CLI=build/spacebvh
+#        BIG="binned:5e7" (extra builder:size runs; empty: none)  THREADS  SPACEBVH_CLI=build/spacebvh
 #        MEMORY_LIMIT=14G (each build is refused, before it starts, when its estimate exceeds this;
 #        the process also gets an address-space limit of MEMORY_LIMIT + 4G as a guard)
 set -euo pipefail
@@ -17,7 +17,7 @@ cli=${SPACEBVH_CLI:-build/spacebvh}
 out=${1:-$(mktemp -d)}
 sizes=${SIZES:-1e5 1e6 1e7}
 builders=${BUILDERS:-binned cbvh spatial embree-medium embree-high}
-big=${BIG:-binned:5e7}
+big=${BIG-binned:5e7}
 limit=${MEMORY_LIMIT:-14G}
 threads=()
 [ -n "${THREADS:-}" ] && threads=(--threads "$THREADS")
