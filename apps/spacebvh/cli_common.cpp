@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include "cli_common.hpp"
 
+#include "spacebvh/memory_estimate.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/sample_rays.hpp"
@@ -11,6 +12,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -70,6 +73,9 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--spatial-bins", spatial_bins, "bins per axis of the spatial search space")->capture_default_str();
     command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
         ->capture_default_str();
+    command.add_option("--memory-limit", memory_limit,
+                       "refuse, before starting, a build whose estimated peak memory exceeds this (bytes or "
+                       "K/M/G/T; default: the memory available, MemAvailable)");
     command.add_option("--spatial-gate", spatial_gate,
                        "try spatial planes only where the best object split's children overlap by at least this "
                        "fraction of the root's surface area (0 = everywhere; default: the builder's)");
@@ -143,6 +149,19 @@ uint32_t parse_unsigned(const std::string& text, const char* what) {
     }
 }
 
+uint64_t parse_bytes(const std::string& text, const char* what) {
+    static constexpr std::string_view kUnits = "KMGT";
+    double value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    const std::string_view unit(end, text.data() + text.size());
+    const size_t power = unit.empty() ? 0 : unit.size() == 1 ? kUnits.find(char(std::toupper(unit[0]))) + 1 : 0;
+    if (ec != std::errc() || !(value > 0) || (!unit.empty() && power == 0) || !std::isfinite(value))
+        throw Error(std::string(what) + ": expected a positive size in bytes, or with K, M, G or T, got '" + text + "'");
+    const double bytes = std::ldexp(value, int(10 * power));
+    if (bytes >= 0x1p64) throw Error(std::string(what) + ": '" + text + "' is more than 2^64 bytes");
+    return uint64_t(bytes);
+}
+
 TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
     std::string builder_name = builder_text;
     const bool optimized_name = strip_optimize_suffix(builder_name);
@@ -157,6 +176,7 @@ TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
     options.object.bins = bins;
     options.spatial.bins = spatial_bins;
     options.limits.reference_budget = reference_budget;
+    if (!memory_limit.empty()) options.limits.memory_limit_bytes = parse_bytes(memory_limit, "--memory-limit");
     options.spatial.unsplitting = !no_unsplitting;
     if (!spatial_gate.empty()) options.spatial.gate_alpha = parse_float_or_inf(spatial_gate, "--spatial-gate");
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
@@ -319,6 +339,11 @@ Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
     }
     throw_if_interrupted();
     return bvh;
+}
+
+uint64_t estimated_build_bytes(const Scene& scene, const TreeRecipe& recipe) {
+    if (is_embree_tree(recipe.builder)) return estimate_embree_tree_memory(scene.triangles.size(), recipe.builder, recipe);
+    return estimate_build_memory(scene.triangles.size(), recipe).bytes;
 }
 
 std::string builder_list() {

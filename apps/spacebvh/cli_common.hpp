@@ -46,6 +46,7 @@ struct BuildCliOptions {
     std::string overlap_penalty;  // a number or "inf"; empty: the builder's own default
     uint32_t max_leaf_size = 8, max_depth = 64, bins = 32, spatial_bins = 32;
     float reference_budget = 1.3f;
+    std::string memory_limit;  // "8G", "512M", bytes; empty: the memory available
     std::string spatial_gate;  // a number; empty: the builder's own
     bool no_unsplitting = false;
     std::string search;  // "object,spatial,grid"; empty: the builder's own search spaces
@@ -135,6 +136,9 @@ void throw_if_interrupted();  // throws Cancelled once Ctrl-C was pressed
 size_t peak_rss_bytes();
 
 Bvh build_tree(const Scene& scene, const TreeRecipe& recipe);
+// What build_tree is estimated to allocate at its peak beyond the scene (our builders' estimate, or
+// Embree's trees').
+uint64_t estimated_build_bytes(const Scene& scene, const TreeRecipe& recipe);
 std::string builder_list();  // for --help
 
 double milliseconds_since(std::chrono::steady_clock::time_point start);
@@ -142,6 +146,8 @@ double median(std::vector<double> values);
 void write_json(const std::string& path, const nlohmann::json& json);
 float parse_float_or_inf(const std::string& text, const char* what);
 uint32_t parse_unsigned(const std::string& text, const char* what);
+// "12345", "512K", "8M", "1.5G", "2T" (powers of 1024) -> bytes. Throws Error naming `what`.
+uint64_t parse_bytes(const std::string& text, const char* what);
 
 void add_info_command(CLI::App& app);
 void add_build_command(CLI::App& app);

@@ -41,6 +41,7 @@ void add_build_command(CLI::App& app) {
         const auto start = std::chrono::steady_clock::now();
         const Bvh bvh = build_tree(scene, build_options);
         const double build_ms = milliseconds_since(start);
+        const size_t build_peak_rss = peak_rss_bytes();  // before the metrics and the tracer's layout
         const TreeStats stats = compute_tree_stats(scene, bvh, build_options.cost, !options->no_epo);
         const Tracer tracer(scene, bvh, Kernel::binary);
 
@@ -62,7 +63,11 @@ void add_build_command(CLI::App& app) {
             std::printf("saved            %s\n", options->save_path.c_str());
         }
         const size_t peak_rss = peak_rss_bytes();
-        std::printf("peak memory      %.1f MiB (resident, whole process)\n", double(peak_rss) / (1024.0 * 1024.0));
+        const uint64_t estimate = estimated_build_bytes(scene, build_options);
+        std::printf("peak memory      %.1f MiB (resident, whole process); %.1f MiB at the end of the build, of which "
+                    "%.1f MiB the scene; the build's estimate %.1f MiB\n",
+                    double(peak_rss) / 1048576.0, double(build_peak_rss) / 1048576.0,
+                    double(scene.triangles.size() * sizeof(Triangle)) / 1048576.0, double(estimate) / 1048576.0);
 
         nlohmann::json json = {{"scene", scene.name},
                                {"triangles", scene.triangles.size()},
@@ -78,6 +83,9 @@ void add_build_command(CLI::App& app) {
                                {"reinsertion_iterations", build_options.reinsertion.iterations},
                                {"build_ms", build_ms},
                                {"peak_rss_bytes", peak_rss},
+                               {"build_peak_rss_bytes", build_peak_rss},
+                               {"scene_bytes", scene.triangles.size() * sizeof(Triangle)},
+                               {"estimated_build_bytes", estimate},
                                {"nodes", stats.nodes},
                                {"leaves", stats.leaves},
                                {"max_depth", stats.max_depth},

@@ -59,6 +59,10 @@ struct LimitConfig {
     // Spatial splits may grow the references to at most this multiple of the triangle count (1..4);
     // the budget is shared deterministically among subtrees and always honoured.
     float reference_budget = 1.3f;
+    // build() refuses, before it starts, a mesh whose estimated peak memory (estimate_build_memory in
+    // spacebvh/memory_estimate.hpp) exceeds this many bytes; 0 = the memory available when it starts
+    // (MemAvailable; no check where that is unknown).
+    uint64_t memory_limit_bytes = 0;
 };
 
 struct ObjectConfig {

@@ -8,5 +8,6 @@
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/geometry.hpp"
+#include "spacebvh/memory_estimate.hpp"
 #include "spacebvh/mesh.hpp"
 #include "spacebvh/trace.hpp"

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The entry points: a preset's references (plain or pre-split) and search spaces handed to the
 // generic top-down driver, then the optional reinsertion optimisation.
+#include "builders/memory_estimate.hpp"
 #include "builders/preset_table.hpp"
 #include "builders/presplit.hpp"
 #include "builders/reinsertion_optimizer.hpp"
@@ -10,18 +11,6 @@
 #include "spacebvh/error.hpp"
 
 namespace spacebvh {
-namespace {
-
-uint32_t search_spaces_of(const builders::BuilderPreset& preset, const BuildConfig& config) {
-    uint32_t spaces = config.search_spaces ? config.search_spaces : preset.search_spaces;
-    // The exact sweep instead of bins: the same planes' rule, every event a candidate.
-    if (config.spatial.exact_sweep && (spaces & uint32_t(SearchSpace::spatial_binned)))
-        spaces = (spaces & ~uint32_t(SearchSpace::spatial_binned)) | uint32_t(SearchSpace::spatial_sweep);
-    return spaces;
-}
-
-}  // namespace
-
 void optimize(Bvh& bvh, const ReinsertionConfig& reinsertion, uint32_t max_depth, const BuildHooks& hooks) {
     if (reinsertion.iterations > kMaxReinsertionIterations)
         throw Error("reinsertion iterations must be in [0, " + std::to_string(kMaxReinsertionIterations) + "], got " +
@@ -38,13 +27,14 @@ void optimize(Bvh& bvh, const ReinsertionConfig& reinsertion, uint32_t max_depth
 
 Bvh build(const MeshView& mesh, const BuildConfig& config) {
     config.validate();
+    builders::check_build_memory(mesh, config);
     const TriangleStore store(mesh);
     const std::span<const Triangle> triangles = store.triangles();
     if (triangles.empty()) throw Error("mesh '" + mesh.name() + "' has no triangles to build a BVH over");
     if (triangles.size() >= (size_t(1) << 31))
         throw Error("mesh '" + mesh.name() + "' has too many triangles (at most 2^31 - 1)");
     const builders::BuilderPreset& preset = builders::preset_of(config.preset);
-    const uint32_t spaces = search_spaces_of(preset, config);
+    const uint32_t spaces = builders::effective_search_spaces(preset, config);
     builders::DriverOptions driver;
     driver.lookahead_depth = config.lookahead.depth;
     driver.lookahead_candidates = config.lookahead.candidates;

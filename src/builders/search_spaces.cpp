@@ -40,6 +40,14 @@ std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t spaces, st
     return finders;
 }
 
+uint32_t effective_search_spaces(const BuilderPreset& preset, const BuildConfig& config) {
+    uint32_t spaces = config.search_spaces ? config.search_spaces : preset.search_spaces;
+    // The exact sweep instead of bins: the same planes' rule, every event a candidate.
+    if (config.spatial.exact_sweep && (spaces & uint32_t(SearchSpace::spatial_binned)))
+        spaces = (spaces & ~uint32_t(SearchSpace::spatial_binned)) | uint32_t(SearchSpace::spatial_sweep);
+    return spaces;
+}
+
 bool splits_references(uint32_t spaces, const BuildConfig& config) {
     return (spaces & (SearchSpace::spatial_binned | SearchSpace::spatial_sweep)) ||
            ((spaces & uint32_t(SearchSpace::grid)) && config.grid.splitting);

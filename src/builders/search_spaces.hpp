@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "builders/preset_table.hpp"
 #include "builders/split.hpp"
 #include "spacebvh/build.hpp"
 
@@ -18,6 +19,10 @@ namespace spacebvh::builders {
 std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t search_spaces, std::span<const Triangle> triangles,
                                                              const BuildConfig& config, bool allow_unsplitting,
                                                              float spatial_gate_alpha);
+
+// The preset's search spaces, or config.search_spaces when set; the exact sweep replaces binned
+// spatial search when config.spatial.exact_sweep is on.
+uint32_t effective_search_spaces(const BuilderPreset& preset, const BuildConfig& config);
 
 // True when the search spaces may clip references into both children (so the reference budget applies).
 bool splits_references(uint32_t search_spaces, const BuildConfig& config);

@@ -24,12 +24,15 @@ namespace spacebvh::builders {
 // tasks of a parallel build write without coordination and the result is the same for any thread
 // count. A final depth-first pass drops unused slots and places siblings side by side.
 struct TopDownBuilder::Impl {
+    // One per slot, 2 * capacity - 1 of them: the largest array of the build, so kept to 36 bytes.
+    // An inner node's left child is always the next slot, and its right child's slot is never 0.
     struct SlotNode {
         AABB bounds;
         uint32_t begin = 0, count = 0;  // the node's references
-        uint32_t left_slot = 0, right_slot = 0;
-        bool is_leaf = false;
+        uint32_t right_slot = 0;        // 0: a leaf
+        bool is_leaf() const { return right_slot == 0; }
     };
+    static_assert(sizeof(SlotNode) == kSlotBytes);
 
     const TopDownBuilder& builder;
     const SplitSearch& search;
@@ -50,7 +53,7 @@ struct TopDownBuilder::Impl {
     std::atomic<size_t> next_progress_report{0};
 
     void make_leaf(SlotNode& node) {
-        node.is_leaf = true;
+        node.right_slot = 0;
         if (!builder.options_.progress) return;
         const size_t done = references_in_leaves.fetch_add(node.count) + node.count;
         const size_t step = input_count / 100 + 1;
@@ -94,7 +97,6 @@ struct TopDownBuilder::Impl {
         const uint32_t right_begin = begin + children.left_capacity;
         const ReferenceSummary left_summary = summarize({references.data() + begin, children.left_count});
         const ReferenceSummary right_summary = summarize({references.data() + right_begin, children.right_count});
-        node.left_slot = slot + 1;
         node.right_slot = slot + 2 * children.left_capacity;
         std::vector<uint32_t> left_rays, right_rays;
         if (!rays.empty()) {
@@ -212,13 +214,25 @@ struct TopDownBuilder::Impl {
         });
     }
 
+    // The nodes and leaf references of the subtree at `slot`, so that emit allocates the tree once.
+    void tally(uint32_t slot, size_t& nodes, size_t& leaf_references) const {
+        const SlotNode& node = slots[slot];
+        ++nodes;
+        if (node.is_leaf()) {
+            leaf_references += node.count;
+            return;
+        }
+        tally(slot + 1, nodes, leaf_references);
+        tally(node.right_slot, nodes, leaf_references);
+    }
+
     // Depth-first, left first; the two children of a node are stored next to each other. A leaf
     // lists each triangle once, in increasing id (pre-split references of one triangle may meet).
     void emit(uint32_t slot, uint32_t out_index, Bvh& bvh) const {
         const SlotNode& node = slots[slot];
         BvhNode& out = bvh.nodes[out_index];
         out.bounds = node.bounds;
-        if (node.is_leaf) {
+        if (node.is_leaf()) {
             const size_t first = bvh.primitives.size();
             for (uint32_t i = node.begin; i < node.begin + node.count; ++i)
                 bvh.primitives.push_back(references[i].primitive);
@@ -232,7 +246,7 @@ struct TopDownBuilder::Impl {
         bvh.nodes.resize(bvh.nodes.size() + 2);
         bvh.nodes[out_index].first = first_child;  // `out` may have moved with the resize
         bvh.nodes[out_index].reference_count = 0;
-        emit(node.left_slot, first_child, bvh);
+        emit(slot + 1, first_child, bvh);
         emit(node.right_slot, first_child + 1, bvh);
     }
 };
@@ -280,11 +294,12 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
     const std::vector<uint32_t> root_rays = termination.enabled() ? termination.meeting(root.bounds, nullptr) : std::vector<uint32_t>{};
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0, root_rays);
 
-    bvh.nodes.reserve(2 * capacity - 1);
-    bvh.primitives.reserve(capacity);
+    size_t node_count = 0, leaf_references = 0;
+    impl.tally(0, node_count, leaf_references);
+    bvh.nodes.reserve(node_count);
+    bvh.primitives.reserve(leaf_references);  // an upper bound: a leaf lists a split triangle once
     bvh.nodes.resize(1);
     impl.emit(0, 0, bvh);
-    bvh.nodes.shrink_to_fit();
     if (options_.progress) options_.progress(1.0);
     return bvh;
 }

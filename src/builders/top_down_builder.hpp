@@ -31,6 +31,9 @@ struct DriverOptions {
     const TerminationConfig* termination = nullptr;  // the termination-aware split choice; null = off
 };
 
+// Bytes per node slot; the driver keeps 2 * capacity - 1 slots (memory_estimate.cpp counts them).
+inline constexpr size_t kSlotBytes = 36;
+
 class TopDownBuilder {
 public:
     TopDownBuilder(CostModel cost, BuildLimits limits, std::vector<std::unique_ptr<SplitFinder>> search_spaces,

@@ -44,6 +44,13 @@ namespace spacebvh::tools {
 // options, or an Embree error.
 Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const BuildConfig& options);
 
+// The peak bytes build_embree_tree(scene, builder, options) allocates beyond the scene, for
+// `triangle_count` triangles: the build primitives (32 bytes per reference of capacity), Embree's
+// temporary tree and the converted tree (measured on builtin:city:N with bench/scale.sh). Like
+// build(), build_embree_tree refuses a build over options.limits.memory_limit_bytes (0: the memory
+// available) before it starts.
+uint64_t estimate_embree_tree_memory(uint64_t triangle_count, const std::string& builder, const BuildConfig& options);
+
 // Embree's trees as builder names beside our presets ("embree-medium", "embree-high"), so every front
 // end (CLI, Python) offers and builds them the same way.
 const std::vector<std::string>& embree_tree_names();

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // Embree's binary trees imported into our Bvh (see embree_builder.hpp).
 #include "spacebvh/tools/embree_builder.hpp"
+#include "spacebvh/memory_estimate.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -323,8 +324,24 @@ bool is_embree_tree(const std::string& builder) {
     return std::find(names.begin(), names.end(), builder) != names.end();
 }
 
+uint64_t estimate_embree_tree_memory(uint64_t triangle_count, const std::string& builder, const BuildConfig& options) {
+    const bool high = builder == "embree-high";
+    const uint64_t capacity =
+        high ? std::max<uint64_t>(triangle_count, uint64_t(double(options.limits.reference_budget) * double(triangle_count)))
+             : triangle_count;
+    // Per reference: the build primitive, Embree's temporary nodes and leaves (measured on
+    // builtin:city:N, about kEmbreeTemporaryBytes), the converted tree (about one 32-byte node and a
+    // 4-byte id) and the node array's growth by doubling; and thread stacks and Embree's own buffers.
+    constexpr uint64_t kEmbreeTemporaryBytes = 48, kFixedBytes = uint64_t(16) << 20;
+    return kFixedBytes + capacity * (sizeof(RTCBuildPrimitive) + kEmbreeTemporaryBytes + 2 * sizeof(BvhNode) + sizeof(uint32_t));
+}
+
 Bvh build_embree_tree(const Scene& scene, const std::string& builder, const BuildConfig& options) {
     if (!is_embree_tree(builder)) throw Error("'" + builder + "' is not one of Embree's trees (embree-medium, embree-high)");
+    check_memory_estimate("scene '" + scene.name + "' (" + std::to_string(scene.triangles.size()) + " triangles, builder " +
+                              builder + ")",
+                          estimate_embree_tree_memory(scene.triangles.size(), builder, options),
+                          options.limits.memory_limit_bytes);
     Bvh bvh = build_bvh_with_embree(scene, builder == "embree-high" ? EmbreeQuality::high : EmbreeQuality::medium, options);
     optimize(bvh, options.reinsertion, options.limits.max_depth, options.hooks);
     return bvh;

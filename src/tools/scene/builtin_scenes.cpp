@@ -5,6 +5,7 @@
 //   interior-rotated  the same rotated x:45,y:45,z:45 (the "rotated Sponza" stress case)
 //   organic           a closed, displaced cube-sphere (dense, smooth, uniform triangles)
 //   soup              large overlapping random triangles
+//   city:N            about N triangles of city blocks over huge ground triangles (city_scene.cpp)
 #include <numbers>
 
 #include "tools/scene/scene_internal.hpp"
@@ -14,6 +15,7 @@ namespace {
 
 constexpr float kPi = std::numbers::pi_v<float>;
 const SceneTransform kInteriorRotation{Vec3(45.0f, 45.0f, 45.0f), 1.0f, Vec3(0.0f)};
+constexpr std::string_view kCityPrefix = "city:";
 
 // splitmix64 (Steele, Lea & Flood 2014), as in docs/rays.md.
 struct SplitMix64 {
@@ -274,10 +276,12 @@ Scene make_builtin_scene(const std::string& name) {
         scene.triangles = make_organic();
     } else if (name == "soup") {
         scene.triangles = make_soup();
+    } else if (name.starts_with(kCityPrefix)) {
+        scene.triangles = scene_detail::make_city(scene_detail::parse_city_size(name.substr(kCityPrefix.size())));
     } else {
         std::string valid;
         for (const std::string& known : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + known;
-        throw Error("unknown builtin scene '" + name + "' (valid: " + valid + ")");
+        throw Error("unknown builtin scene '" + name + "' (valid: " + valid + ", city:N)");
     }
     scene.degenerate_count = scene_detail::count_degenerate(scene.triangles);
     return scene;
@@ -293,6 +297,7 @@ std::optional<Camera> builtin_camera(const std::string& name) {
     interior.up = {0.0f, 1.0f, 0.0f};
     interior.fovy_degrees = 60.0f;
     if (name == "interior") return interior;
+    if (name.starts_with(kCityPrefix)) return city_camera(parse_city_size(name.substr(kCityPrefix.size())));
     if (name == "interior-rotated") {
         Camera rotated = interior;
         rotated.eye = kInteriorRotation.apply(interior.eye);

@@ -97,6 +97,14 @@ std::vector<Triangle> load_obj(const std::string& path);
 std::vector<Triangle> load_ply(const std::string& path);
 std::vector<Triangle> load_gltf(const std::string& path);  // .gltf and .glb
 
+// builtin:city:N (city_scene.cpp): N, checked to lie in [kMinCityTriangles, kMaxCityTriangles], and
+// the city of about N triangles (within a fraction of a percent from 10^4 triangles up).
+inline constexpr uint64_t kMinCityTriangles = 100;
+inline constexpr uint64_t kMaxCityTriangles = 2'000'000'000;
+uint64_t parse_city_size(const std::string& text);
+std::vector<Triangle> make_city(uint64_t target_triangles);
+Camera city_camera(uint64_t target_triangles);
+
 // Built-in scenes' own cameras (in the builtin's coordinates), if they define one.
 std::optional<Camera> builtin_camera(const std::string& name);
 
