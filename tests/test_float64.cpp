@@ -318,6 +318,24 @@ TEST(Float64Tracer, RayJustOffFarSurfaceCastAwayMisses) {
     EXPECT_NEAR(back.t, 0.01, 1e-9);
 }
 
+// The boxes hold the float64 triangles, not only their float32 stand-ins: a triangle whose top edge
+// lies 2^-30 above the stand-in's (which rounds it down onto y = 0.5 in the local frame) is hit by a
+// ray passing between the two.
+TEST(Float64Tracer, BoxesContainTheFloat64Triangles) {
+    const double delta = 0x1p-30;
+    const std::vector<double> xyz = {0, 0, 0, 0.5, 1 + delta, 0, 0, 1 + delta, 0};
+    const std::vector<uint32_t> indices = {0, 1, 2};
+    const MeshView mesh(xyz, indices);
+    EXPECT_EQ(local_frame_mesh(mesh).triangles[0].v1.y, 0.5f);
+    const Tracer64 tracer(mesh);
+    const Ray64 ray{{0.1, 1 + delta / 2, 5}, {0, 0, -1}};
+    const Hit64 hit = tracer.intersect(ray);
+    ASSERT_TRUE(hit.is_hit());
+    EXPECT_EQ(hit.t, 5.0);
+    EXPECT_TRUE(tracer.occluded(ray));
+    EXPECT_GE(double(tracer.bvh().root().bounds.hi.y) + tracer.frame_origin()[1], 1 + delta);
+}
+
 // A float64 triangle whose float32 stand-in has zero area (tiny beside the rest of the mesh) is
 // still found; an exactly collinear one never is.
 TEST(Float64Tracer, TinyTriangleBesideLargeMeshIsHit) {
