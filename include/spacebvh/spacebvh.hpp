@@ -7,6 +7,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/float64.hpp"
 #include "spacebvh/geometry.hpp"
 #include "spacebvh/mesh.hpp"
 #include "spacebvh/trace.hpp"
