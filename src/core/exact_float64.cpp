@@ -125,8 +125,12 @@ int range_sign_exact(const Ray64& ray, const Triangle64& tri, double tau) {
 
 }  // namespace
 
-double edge_function(const Vec3d& o, const Vec3d& d, const Vec3d& p, const Vec3d& q) {
-    const Estimate estimate = triple_product(d, sub(p, o), sub(q, o));
+namespace {
+
+// The edge function with p - o and q - o already rounded (shared by the three edges of a triangle).
+double edge_function_relative(const Vec3d& o, const Vec3d& d, const Vec3d& p, const Vec3d& q, const Vec3d& p_rounded,
+                              const Vec3d& q_rounded) {
+    const Estimate estimate = triple_product(d, p_rounded, q_rounded);
     if (std::fabs(estimate.value) > kTripleProductBound * estimate.magnitude && estimate.magnitude > kSmallestTrusted)
         return estimate.value;
     Pair dir[3], p_rel[3], q_rel[3];
@@ -142,6 +146,12 @@ double edge_function(const Vec3d& o, const Vec3d& d, const Vec3d& p, const Vec3d
                             ? std::fabs(estimate.value)
                             : std::numeric_limits<double>::min();
     return sign > 0 ? size : -size;
+}
+
+}  // namespace
+
+double edge_function(const Vec3d& o, const Vec3d& d, const Vec3d& p, const Vec3d& q) {
+    return edge_function_relative(o, d, p, q, sub(p, o), sub(q, o));
 }
 
 bool is_degenerate(const Triangle64& tri) {
@@ -171,10 +181,11 @@ std::optional<ExactHit> intersect(const Ray64& ray, const Triangle64& tri, bool 
     // Edge functions opposite v0, v1, v2 (Plücker): exact signs, so a ray through a shared edge or
     // vertex gets the same zero or the same opposite signs in every triangle there (watertight and
     // closed); inside when no two signs differ.
-    const double u = edge_function(ray.org, ray.dir, tri.v1, tri.v2);
-    const double v = edge_function(ray.org, ray.dir, tri.v2, tri.v0);
+    const Vec3d a = sub(tri.v0, ray.org), b = sub(tri.v1, ray.org), c = sub(tri.v2, ray.org);
+    const double u = edge_function_relative(ray.org, ray.dir, tri.v1, tri.v2, b, c);
+    const double v = edge_function_relative(ray.org, ray.dir, tri.v2, tri.v0, c, a);
     if ((u < 0.0 && v > 0.0) || (u > 0.0 && v < 0.0)) return std::nullopt;
-    const double w = edge_function(ray.org, ray.dir, tri.v0, tri.v1);
+    const double w = edge_function_relative(ray.org, ray.dir, tri.v0, tri.v1, a, b);
     const bool any_negative = u < 0.0 || v < 0.0 || w < 0.0;
     const bool any_positive = u > 0.0 || v > 0.0 || w > 0.0;
     if (any_negative == any_positive) return std::nullopt;  // outside, or the ray in the plane
@@ -182,8 +193,7 @@ std::optional<ExactHit> intersect(const Ray64& ray, const Triangle64& tri, bool 
     // u + v + w = d · n exactly (n = (v1 - v0) × (v2 - v0)), so the shared sign is that of the
     // denominator of t = num / den, num = (v0 - o) · ((v1 - o) × (v2 - o)).
     const int den_sign = any_positive ? 1 : -1;
-    const Vec3d a = sub(tri.v0, ray.org);
-    const Estimate num = triple_product(a, sub(tri.v1, ray.org), sub(tri.v2, ray.org));
+    const Estimate num = triple_product(a, b, c);
     const Estimate den = triple_product(ray.dir, sub(tri.v1, tri.v0), sub(tri.v2, tri.v0));
     // t >= tau exactly when sign(num - tau den) * sign(den) >= 0.
     auto at_or_after = [&](double tau) {
