@@ -92,11 +92,15 @@ Frame make_frame(const MeshView& view, const std::vector<Triangle64>& triangles)
     return frame;
 }
 
+// Floats below and above x; x is a rounded double, so it is first moved one double ulp outward
+// (the exact value it stands for lies within half of one).
 float round_down(double x) {
+    x = std::nextafter(x, -kInf);
     float f = float(x);
     return double(f) > x ? std::nextafter(f, -kInfinity) : f;
 }
 float round_up(double x) {
+    x = std::nextafter(x, kInf);
     float f = float(x);
     return double(f) < x ? std::nextafter(f, kInfinity) : f;
 }
