@@ -371,6 +371,12 @@ TEST(Float64Tracer, OutOfRangeInputIsAClearError) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("ray 1"), std::string::npos) << e.what();
     }
+    // A tree built over the global float triangles instead of the local-frame stand-ins.
+    const std::vector<double> far_xyz = {1e7, 0, 0, 1e7 + 1, 0, 0, 1e7, 1, 0, 1e7 + 9, 0, 0, 1e7 + 10, 0, 0, 1e7 + 9, 1, 0};
+    const std::vector<uint32_t> two = {0, 1, 2, 3, 4, 5};
+    const MeshView far(far_xyz, two);
+    EXPECT_THROW(Tracer64(far, build(MeshView(far.triangles()), Quality::fast)), Error);
+    EXPECT_NO_THROW(Tracer64(far, build(MeshView(local_frame_mesh(far).triangles), Quality::fast)));
     const std::vector<double> tiny_xyz = {0, 0, 0, 1, 0, 0, 0, 1, 1e-70};
     try {
         Tracer64 bad(MeshView(tiny_xyz, indices).named("tiny"));

@@ -61,7 +61,8 @@ public:
     // Builds the tree with `config` over local_frame_mesh(mesh). Throws Error for an empty or malformed
     // mesh, or a vertex coordinate that is neither 0 nor of magnitude >= 2^-200 (outside the exact range).
     explicit Tracer64(const MeshView& mesh, const BuildConfig& config = BuildConfig::for_quality(Quality::balanced));
-    // With a tree already built over local_frame_mesh(mesh).triangles (any builder).
+    // With a tree already built over local_frame_mesh(mesh).triangles (any builder); throws Error when
+    // a leaf box misses a triangle it holds (a tree built over other triangles).
     Tracer64(const MeshView& mesh, const Bvh& local_frame_bvh);
     ~Tracer64();
     Tracer64(Tracer64&&) noexcept;

@@ -206,6 +206,18 @@ void Tracer64::Impl::init(const MeshView& mesh, const std::vector<Triangle64>& m
         if (depth[n] > kMaxDepth) throw Error(what + ": the tree is deeper than " + std::to_string(kMaxDepth) + " levels");
         if (!bvh.nodes[n].is_leaf()) depth[bvh.nodes[n].first] = depth[bvh.nodes[n].first + 1] = depth[n] + 1;
     }
+    // A tree over other triangles (not the local-frame stand-ins) would silently lose hits: each leaf
+    // box must meet the stand-in of every triangle it holds (a split reference holds a part).
+    for (size_t n = 0; n < bvh.nodes.size(); ++n) {
+        const BvhNode& node = bvh.nodes[n];
+        for (uint32_t k = 0; node.is_leaf() && k < node.reference_count; ++k) {
+            const Triangle& stand_in = frame.mesh.triangles[bvh.primitives[node.first + k]];
+            if (!stand_in.is_degenerate() && spacebvh::intersect(node.bounds, stand_in.bounds()).is_empty())
+                throw Error(what + ": leaf " + std::to_string(n) + " does not hold triangle " +
+                            std::to_string(bvh.primitives[node.first + k]) +
+                            " of local_frame_mesh(mesh): the tree was built over other triangles");
+        }
+    }
     degenerate.assign(count, 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const auto& range) {
         for (size_t t = range.begin(); t != range.end(); ++t) degenerate[t] = exact::is_degenerate(triangles[t]);
