@@ -13,6 +13,8 @@
 
 namespace spacebvh {
 
+struct Triangle64;  // spacebvh/float64.hpp
+
 // A triangle mesh in one of the forms renderers keep: a soup of triangles, or vertex coordinates
 // (x, y, z per vertex, float or double) with three vertex indices per triangle (uint32_t or int64_t,
 // 0-based). Triangles are numbered in index order; hits report these numbers. Double coordinates are
@@ -41,6 +43,9 @@ public:
     // The triangles, checked: throws Error naming the mesh and the vertex or triangle for a length
     // that is not a multiple of 3, a NaN/inf coordinate or an index out of range.
     std::vector<Triangle> triangles() const;
+    // The triangles with the coordinates as given (double coordinates kept, float ones widened),
+    // checked as triangles() is.
+    std::vector<Triangle64> triangles64() const;
 
 private:
     std::span<const Triangle> soup_;

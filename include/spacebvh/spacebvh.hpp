@@ -7,6 +7,7 @@
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/float64.hpp"
 #include "spacebvh/geometry.hpp"
 #include "spacebvh/memory_estimate.hpp"
 #include "spacebvh/mesh.hpp"

@@ -151,6 +151,23 @@ class Tracer:
     ) -> Any:
         """A (height, width, 3) uint8 image; with heatmap=True (image, dict of scale and totals)."""
 
+class Tracer64:
+    """A float64 mesh traced exactly with float64 rays (docs/float64.md)."""
+
+    def __init__(self, vertices: _Rows, faces: npt.ArrayLike, builder: str = "binned", threads: int = 0) -> None: ...
+    @property
+    def triangle_count(self) -> int: ...
+    @property
+    def frame_origin(self) -> Tuple[float, float, float]: ...
+    def intersect(
+        self, origins: _Rows, directions: _Rows, tmin: Optional[_PerRay] = None, tmax: Optional[_PerRay] = None
+    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """Closest hits: t (float64, inf on a miss), primitive (-1 on a miss), u, v (float64)."""
+    def occluded(
+        self, origins: _Rows, directions: _Rows, tmin: Optional[_PerRay] = None, tmax: Optional[_PerRay] = None
+    ) -> npt.NDArray[np.bool_]:
+        """Any hit within [tmin, tmax], decided exactly: a bool array."""
+
 class EmbreeTracer:
     """Embree 3's own BVH and kernel over a scene, on the same numpy rays (not watertight)."""
 

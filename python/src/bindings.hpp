@@ -91,6 +91,7 @@ void bind_rays(py::module_& m);
 void bind_render(py::module_& m, py::class_<PyTracer>& tracer);
 void bind_embree(py::module_& m);
 void bind_queries(py::module_& m);  // queries.cpp: RayQueries
+void bind_float64(py::module_& m);  // float64.cpp: Tracer64
 
 // Closest hits as (t, primitive, u, v) arrays: t in the scene's dtype (inf on a miss), primitive
 // int64 (-1 on a miss), u, v float32. Used by every tracer binding.

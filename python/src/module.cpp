@@ -43,4 +43,5 @@ PYBIND11_MODULE(_core, m) {
     bind_rays(m);
     bind_embree(m);
     bind_queries(m);
+    bind_float64(m);
 }

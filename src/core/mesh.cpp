@@ -2,14 +2,16 @@
 #include "spacebvh/mesh.hpp"
 
 #include <cmath>
+#include <type_traits>
 
 #include "spacebvh/error.hpp"
+#include "spacebvh/float64.hpp"
 
 namespace spacebvh {
 namespace {
 
-template <typename Coordinate, typename Index>
-std::vector<Triangle> expand(std::span<const Coordinate> xyz, std::span<const Index> indices, const std::string& name) {
+template <typename Coordinate, typename Index, typename Out = Triangle>
+std::vector<Out> expand(std::span<const Coordinate> xyz, std::span<const Index> indices, const std::string& name) {
     const std::string what = "mesh '" + name + "'";
     if (xyz.size() % 3 != 0)
         throw Error(what + ": " + std::to_string(xyz.size()) + " vertex coordinates, not a multiple of 3");
@@ -23,9 +25,12 @@ std::vector<Triangle> expand(std::span<const Coordinate> xyz, std::span<const In
         if (index < 0 || uint64_t(index) >= vertex_count)
             throw Error(what + ": triangle " + std::to_string(triangle) + " uses vertex " + std::to_string(index) +
                         ", outside 0.." + std::to_string(int64_t(vertex_count) - 1));
-        return Vec3{float(xyz[3 * index]), float(xyz[3 * index + 1]), float(xyz[3 * index + 2])};
+        if constexpr (std::is_same_v<Out, Triangle64>)
+            return Vec3d{double(xyz[3 * index]), double(xyz[3 * index + 1]), double(xyz[3 * index + 2])};
+        else
+            return Vec3{float(xyz[3 * index]), float(xyz[3 * index + 1]), float(xyz[3 * index + 2])};
     };
-    std::vector<Triangle> triangles;
+    std::vector<Out> triangles;
     triangles.reserve(indices.size() / 3);
     for (size_t t = 0; t < indices.size() / 3; ++t) triangles.push_back({vertex(t, 0), vertex(t, 1), vertex(t, 2)});
     return triangles;
@@ -52,6 +57,22 @@ std::vector<Triangle> MeshView::triangles() const {
     if (double_xyz_.empty())
         return u32_indices_.empty() ? expand(float_xyz_, i64_indices_, name_) : expand(float_xyz_, u32_indices_, name_);
     return u32_indices_.empty() ? expand(double_xyz_, i64_indices_, name_) : expand(double_xyz_, u32_indices_, name_);
+}
+
+std::vector<Triangle64> MeshView::triangles64() const {
+    if (is_soup()) {
+        check_soup(soup_, name_);
+        std::vector<Triangle64> out;
+        out.reserve(soup_.size());
+        auto widen = [](Vec3 p) { return Vec3d{p.x, p.y, p.z}; };
+        for (const Triangle& t : soup_) out.push_back({widen(t.v0), widen(t.v1), widen(t.v2)});
+        return out;
+    }
+    if (double_xyz_.empty())
+        return u32_indices_.empty() ? expand<float, int64_t, Triangle64>(float_xyz_, i64_indices_, name_)
+                                    : expand<float, uint32_t, Triangle64>(float_xyz_, u32_indices_, name_);
+    return u32_indices_.empty() ? expand<double, int64_t, Triangle64>(double_xyz_, i64_indices_, name_)
+                                : expand<double, uint32_t, Triangle64>(double_xyz_, u32_indices_, name_);
 }
 
 TriangleStore::TriangleStore(const MeshView& mesh) {

@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "spacebvh/float64.hpp"
 #include "spacebvh/geometry.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/scene.hpp"
@@ -18,6 +19,10 @@ namespace spacebvh::tools {
 // The arbiter: the closest exact hit over every triangle (brute force), or occlusion.
 HitRecord arbiter_closest_hit(const Scene& scene, const Ray& ray);
 HitRecord arbiter_occlusion(const Scene& scene, const Ray& ray);
+// The float64 arbiter: every triangle by the exact float64 test (intersect_exact); equal t keeps the
+// lower triangle id.
+Hit64 arbiter_closest_hit(std::span<const Triangle64> triangles, const Ray64& ray);
+bool arbiter_occlusion(std::span<const Triangle64> triangles, const Ray64& ray);
 
 // Two records agree when both miss, or both hit with
 // |tA - tB| <= 1e-4 * max(|tA|, |tB|) + 1e-6 * scene_diagonal / |dir|.

@@ -54,6 +54,21 @@ HitRecord arbiter_occlusion(const Scene& scene, const Ray& ray) {
     return occlusion_record(false);
 }
 
+Hit64 arbiter_closest_hit(std::span<const Triangle64> triangles, const Ray64& ray) {
+    Hit64 best;
+    for (size_t i = 0; i < triangles.size(); ++i) {
+        const Hit64 hit = intersect_exact(ray, triangles[i], uint32_t(i));
+        if (hit.is_hit() && hit.t < best.t) best = hit;  // strict: equal t keeps the lower index
+    }
+    return best;
+}
+
+bool arbiter_occlusion(std::span<const Triangle64> triangles, const Ray64& ray) {
+    for (size_t i = 0; i < triangles.size(); ++i)
+        if (intersect_exact(ray, triangles[i], uint32_t(i)).is_hit()) return true;
+    return false;
+}
+
 bool hits_agree(const HitRecord& a, const HitRecord& b, const Ray& ray, float scene_diagonal) {
     if (!a.is_hit() || !b.is_hit()) return a.is_hit() == b.is_hit();
     const double ta = a.t, tb = b.t;
