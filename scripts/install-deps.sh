@@ -16,13 +16,5 @@ packages=(
   libgmp-dev            # exact rational reference in the query tests
   python3-dev python3-venv  # the Python package (pyproject.toml): headers, and venv for the tests
 )
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  export DEBIAN_FRONTEND=noninteractive
-  $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+source "$(dirname "$0")/lib/apt-install.sh"
+install_missing_packages "${packages[@]}"

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "io/tree_file_checksum.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh {
@@ -246,6 +247,10 @@ std::string tree_problem(const Bvh& bvh, std::span<const Triangle> triangles) {
 }
 
 }  // namespace
+
+uint64_t tree_file_detail::checksum(std::span<const std::byte> covered) {
+    return hash_bytes(covered.data(), covered.size(), kChecksumSeed);
+}
 
 uint64_t geometry_hash(std::span<const Triangle> triangles) {
     const uint64_t seed = kGeometrySeed ^ mix(uint64_t(triangles.size()));

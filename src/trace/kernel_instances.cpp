@@ -122,8 +122,12 @@ struct Policy : SseOperations {};
 #include "trace/kernel_entry_points.inl"
 }  // namespace sse_kernels
 
+#if defined(__clang__)  // clang ignores GCC's target pragma; its own attribute pragma does the same
+#pragma clang attribute push(__attribute__((target("avx2,fma"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
+#endif
 struct Avx2Operations {
     static constexpr int kLanes = 8;
     static constexpr bool kScalarTriangles = false;
@@ -155,10 +159,18 @@ struct Policy : Avx2Operations {};
 #include "trace/packet_kernel.inl"
 #include "trace/kernel_entry_points.inl"
 }  // namespace avx2_kernels
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
+#if defined(__clang__)  // clang ignores GCC's target pragma; its own attribute pragma does the same
+#pragma clang attribute push(__attribute__((target("avx2,fma,avx512f,avx512vl"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx2,fma,avx512f,avx512vl")
+#endif
 // AVX-512VL: compares straight into mask registers, and the hit children compressed into slot order
 // in registers (a compress to memory is microcoded and slow on some CPUs).
 namespace avx512_kernels {
@@ -192,7 +204,11 @@ struct Policy<8> : Avx2Operations {
 #include "trace/packet_kernel.inl"
 #include "trace/kernel_entry_points.inl"
 }  // namespace avx512_kernels
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
 bool cpu_has(NodeTest test) {
     switch (test) {

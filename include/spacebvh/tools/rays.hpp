@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <span>
 #include <string>
 #include <vector>
@@ -58,5 +59,9 @@ void write_ray_file(const std::string& path, std::span<const Ray> rays);
 std::vector<Ray> read_ray_file(const std::string& path);  // throws Error naming the file and record
 void write_hit_file(const std::string& path, std::span<const HitRecord> hits);
 std::vector<HitRecord> read_hit_file(const std::string& path);
+// The same from a stream open for reading at its start (a pipe cannot do: the size is checked
+// first), e.g. fmemopen over bytes in memory; the readers close it. `name` starts every message.
+std::vector<Ray> read_ray_file(std::FILE* file, const std::string& name);
+std::vector<HitRecord> read_hit_file(std::FILE* file, const std::string& name);
 
 }  // namespace spacebvh::tools

@@ -89,8 +89,10 @@ struct RecordFile {
     size_t count = 0;
 };
 
-RecordFile open_records(const std::string& path, const char (&magic)[8], const char* what, size_t record_bytes) {
-    RecordFile rf{open_file(path, "rb"), 0};
+// `file` is open for reading at its start; `path` names it in messages.
+RecordFile open_records(FilePtr file, const std::string& path, const char (&magic)[8], const char* what,
+                        size_t record_bytes) {
+    RecordFile rf{std::move(file), 0};
     std::FILE* f = rf.file.get();
     if (std::fseek(f, 0, SEEK_END) != 0) throw Error(path + ": cannot determine the file size");
     const long end = std::ftell(f);
@@ -140,8 +142,10 @@ void write_ray_file(const std::string& path, std::span<const Ray> rays) {
     });
 }
 
-std::vector<Ray> read_ray_file(const std::string& path) {
-    RecordFile rf = open_records(path, kRayMagic, "ray", kRayRecordBytes);
+std::vector<Ray> read_ray_file(const std::string& path) { return read_ray_file(open_file(path, "rb").release(), path); }
+
+std::vector<Ray> read_ray_file(std::FILE* file, const std::string& path) {
+    RecordFile rf = open_records(FilePtr(file), path, kRayMagic, "ray", kRayRecordBytes);
     std::vector<Ray> rays(rf.count);
     read_records(path, rf, kRayRecordBytes, [&](size_t i, const unsigned char* in) {
         Ray& r = rays[i];
@@ -170,8 +174,10 @@ void write_hit_file(const std::string& path, std::span<const HitRecord> hits) {
     });
 }
 
-std::vector<HitRecord> read_hit_file(const std::string& path) {
-    RecordFile rf = open_records(path, kHitMagic, "hit", kHitRecordBytes);
+std::vector<HitRecord> read_hit_file(const std::string& path) { return read_hit_file(open_file(path, "rb").release(), path); }
+
+std::vector<HitRecord> read_hit_file(std::FILE* file, const std::string& path) {
+    RecordFile rf = open_records(FilePtr(file), path, kHitMagic, "hit", kHitRecordBytes);
     std::vector<HitRecord> hits(rf.count);
     read_records(path, rf, kHitRecordBytes, [&](size_t i, const unsigned char* in) {
         hits[i].t = get_f32(in);

@@ -281,7 +281,7 @@ private:
 
 // GLB container (glTF 2.0 spec, section 4.4): checked here so that a truncated or lying header is
 // reported with its byte offset instead of reaching tinygltf.
-void check_glb_container(const std::string& path, const std::string& bytes) {
+void check_glb_container(const std::string& path, std::string_view bytes) {
     auto u32 = [&](size_t offset) {
         uint32_t v;
         std::memcpy(&v, bytes.data() + offset, 4);
@@ -308,8 +308,9 @@ void check_glb_container(const std::string& path, const std::string& bytes) {
 
 }  // namespace
 
-std::vector<Triangle> load_gltf(const std::string& path) {
-    const std::string bytes = read_file_bytes(path);
+std::vector<Triangle> load_gltf(const std::string& path) { return parse_gltf(read_file_bytes(path), path); }
+
+std::vector<Triangle> parse_gltf(std::string_view bytes, const std::string& path) {
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw Error(path + ": file too large for tinygltf");
     const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
     std::string extension = std::filesystem::path(path).extension().string();

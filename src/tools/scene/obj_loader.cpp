@@ -51,8 +51,9 @@ bool split_vertex_reference(std::string_view token, std::string_view& vertex_par
 
 }  // namespace
 
-std::vector<Triangle> load_obj(const std::string& path) {
-    const std::string data = read_file_bytes(path);
+std::vector<Triangle> load_obj(const std::string& path) { return parse_obj(read_file_bytes(path), path); }
+
+std::vector<Triangle> parse_obj(std::string_view data, const std::string& path) {
     std::vector<Vec3> vertices;
     std::vector<uint32_t> corners;  // 3 vertex indices (0-based) per triangle
     // Positive indices may refer forward (to vertices defined later in the file); the largest one is

@@ -75,14 +75,14 @@ std::vector<std::string_view> split_words(std::string_view line) {
     return words;
 }
 
-Header parse_header(const std::string& path, const std::string& data) {
+Header parse_header(const std::string& path, std::string_view data) {
     Header header;
     size_t pos = 0;
     size_t line = 0;
     bool have_format = false;
     for (;;) {
         size_t eol = data.find('\n', pos);
-        if (eol == std::string::npos)
+        if (eol == std::string_view::npos)
             fail_at_line(path, line + 1, "PLY header is not terminated by 'end_header'");
         ++line;
         std::string_view text(data.data() + pos, eol - pos);
@@ -152,7 +152,7 @@ Header parse_header(const std::string& path, const std::string& data) {
 // Reads body values one at a time, in either encoding, and says where it is for error messages.
 class BodyReader {
 public:
-    BodyReader(const std::string& path, const std::string& data, const Header& header)
+    BodyReader(const std::string& path, std::string_view data, const Header& header)
         : path_(path), data_(data), format_(header.format), pos_(header.body_offset), line_(header.body_line) {}
 
     void start_element(const Element& element, uint64_t index) {
@@ -243,7 +243,7 @@ private:
     }
 
     const std::string& path_;
-    const std::string& data_;
+    std::string_view data_;
     Format format_;
     size_t pos_;
     size_t line_;
@@ -277,8 +277,9 @@ int find_property(const Element& element, std::initializer_list<std::string_view
 
 }  // namespace
 
-std::vector<Triangle> load_ply(const std::string& path) {
-    const std::string data = read_file_bytes(path);
+std::vector<Triangle> load_ply(const std::string& path) { return parse_ply(read_file_bytes(path), path); }
+
+std::vector<Triangle> parse_ply(std::string_view data, const std::string& path) {
     const Header header = parse_header(path, data);
     BodyReader reader(path, data, header);
 

@@ -105,6 +105,13 @@ uint64_t parse_city_size(const std::string& text);
 std::vector<Triangle> make_city(uint64_t target_triangles);
 Camera city_camera(uint64_t target_triangles);
 
+// The same readers over a file's bytes already in memory (the fuzz harnesses feed them directly).
+// `path` names the input in error messages; parse_gltf also takes from it the extension (.glb
+// requires the GLB container) and the folder that external buffer URIs are relative to.
+std::vector<Triangle> parse_obj(std::string_view data, const std::string& path);
+std::vector<Triangle> parse_ply(std::string_view data, const std::string& path);
+std::vector<Triangle> parse_gltf(std::string_view bytes, const std::string& path);
+
 // Built-in scenes' own cameras (in the builtin's coordinates), if they define one.
 std::optional<Camera> builtin_camera(const std::string& name);
 

@@ -1,0 +1,129 @@
+// SPDX-License-Identifier: MIT
+#include "fuzz_targets.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "builder_spec.hpp"
+#include "io/tree_file_checksum.hpp"
+#include "spacebvh/error.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/trace.hpp"
+#include "spacebvh/tree_file.hpp"
+#include "tools/scene/scene_internal.hpp"
+
+namespace spacebvh::fuzz {
+namespace {
+
+std::string_view as_text(std::span<const uint8_t> bytes) {
+    return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+// The ray and hit readers' stream entry over the bytes themselves (no file system in the loop).
+std::FILE* memory_stream(std::span<const uint8_t> bytes) {
+    static const char kEmpty = 0;  // fmemopen wants a buffer even for 0 bytes
+    void* buffer = bytes.empty() ? const_cast<char*>(&kEmpty) : static_cast<void*>(const_cast<uint8_t*>(bytes.data()));
+    std::FILE* file = ::fmemopen(buffer, bytes.size(), "rb");
+    if (file == nullptr) throw std::runtime_error("fuzz: fmemopen failed");
+    return file;
+}
+
+// Rays through the geometry's box from a few directions, including axis-parallel ones (zero
+// direction components) and some starting inside.
+std::vector<Ray> probe_rays() {
+    std::vector<Ray> rays;
+    for (int i = 0; i < 64; ++i) {
+        const float a = float(i % 8) / 7.0f, b = float(i / 8) / 7.0f;
+        rays.push_back(Ray{{-1.0f + 6.0f * a, -1.0f + 6.0f * b, -5.0f}, {0.0f, 0.0f, 1.0f}});
+        rays.push_back(Ray{{6.0f, 3.0f * a, 3.0f * b}, {-1.0f, 0.1f * a, -0.2f * b}});
+        rays.push_back(Ray{{2.0f, 2.0f, 0.5f}, {a - 0.5f, b - 0.5f, 0.3f}});
+    }
+    return rays;
+}
+
+void trace_all(const Bvh& bvh) {
+    const MeshView mesh(fuzz_geometry());
+    const std::vector<Ray> rays = probe_rays();
+    for (const Kernel kernel : {Kernel::automatic, Kernel::binary, Kernel::packet8}) {
+        const Tracer tracer(mesh, bvh, kernel);
+        std::vector<Hit> hits(rays.size());
+        tracer.intersect(rays, hits);
+        std::vector<uint8_t> occluded(rays.size());
+        tracer.occluded(rays, occluded);
+        for (size_t i = 0; i < rays.size(); ++i)
+            if (hits[i].is_hit() && hits[i].primitive >= fuzz_geometry().size())
+                throw std::logic_error("fuzz: a loaded tree's hit names triangle " + std::to_string(hits[i].primitive));
+    }
+}
+
+void feed_tree_file(std::span<const uint8_t> bytes) {
+    if (bytes.empty()) return;
+    std::vector<std::byte> file(bytes.size() - 1);
+    std::transform(bytes.begin() + 1, bytes.end(), file.begin(), [](uint8_t b) { return std::byte(b); });
+    if ((bytes[0] & 1) != 0) {
+        constexpr size_t kAtFileSize = 32, kHeaderSize = 96;
+        if (file.size() >= kHeaderSize) {
+            const uint64_t size = file.size();
+            for (int i = 0; i < 8; ++i) file[kAtFileSize + i] = std::byte(uint8_t(size >> (8 * i)));
+        }
+        if (file.size() >= 8) {
+            const uint64_t sum = tree_file_detail::checksum(std::span(file).first(file.size() - 8));
+            for (int i = 0; i < 8; ++i) file[file.size() - 8 + i] = std::byte(uint8_t(sum >> (8 * i)));
+        }
+    }
+    TreeFileInfo info;
+    const Bvh bvh = deserialize_bvh(file, fuzz_geometry(), "fuzz.sbvh", &info);
+    trace_all(bvh);
+}
+
+// The row syntax and the settings' ranges only: building the tree a valid row asks for can take
+// seconds by design (grid=64 with lookahead), which a fuzzer would report as a hang.
+void feed_builder_spec(std::span<const uint8_t> bytes) {
+    const cli::BuilderSpec spec = cli::parse_builder_spec(std::string(as_text(bytes)), cli::BuildCliOptions{});
+    spec.options.validate();
+}
+
+}  // namespace
+
+const std::vector<std::string>& target_names() {
+    static const std::vector<std::string> names = {"obj",      "ply",       "gltf",        "ray_file",
+                                                   "hit_file", "tree_file", "builder_spec"};
+    return names;
+}
+
+void feed(std::string_view target, std::span<const uint8_t> bytes) {
+    using namespace tools::scene_detail;
+    if (target == "obj") parse_obj(as_text(bytes), "fuzz.obj");
+    else if (target == "ply") parse_ply(as_text(bytes), "fuzz.ply");
+    else if (target == "gltf") parse_gltf(as_text(bytes), "fuzz.gltf");
+    else if (target == "ray_file") tools::read_ray_file(memory_stream(bytes), "fuzz.rays");
+    else if (target == "hit_file") tools::read_hit_file(memory_stream(bytes), "fuzz.hits");
+    else if (target == "tree_file") feed_tree_file(bytes);
+    else if (target == "builder_spec") feed_builder_spec(bytes);
+    else throw std::invalid_argument("fuzz: unknown target '" + std::string(target) + "'");
+}
+
+const std::vector<Triangle>& fuzz_geometry() {
+    static const std::vector<Triangle> triangles = [] {
+        std::vector<Triangle> t;
+        // A 4 x 4 grid of quads at z = 0 (two triangles each) ...
+        for (int y = 0; y < 4; ++y)
+            for (int x = 0; x < 4; ++x) {
+                const float x0 = float(x), y0 = float(y);
+                t.push_back({{x0, y0, 0}, {x0 + 1, y0, 0}, {x0 + 1, y0 + 1, 0}});
+                t.push_back({{x0, y0, 0}, {x0 + 1, y0 + 1, 0}, {x0, y0 + 1, 0}});
+            }
+        // ... long slivers across it (spatial splits cut them), a tilted wall, and two degenerates.
+        t.push_back({{-0.5f, 0.1f, 1}, {4.5f, 3.9f, 1.5f}, {4.5f, 4.0f, 1.5f}});
+        t.push_back({{0.2f, 3.8f, 2}, {3.9f, 0.3f, 0.5f}, {4.0f, 0.2f, 0.6f}});
+        t.push_back({{0, 0, 0}, {4, 0, 3}, {0, 4, 3}});
+        t.push_back({{1, 1, 1}, {2, 2, 2}, {3, 3, 3}});
+        t.push_back({{2, 1, 1}, {2, 1, 1}, {2, 1, 1}});
+        return t;
+    }();
+    return triangles;
+}
+
+}  // namespace spacebvh::fuzz
