@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Every input the fuzz harnesses (fuzz/) found a crash, hang, sanitizer report or unexpected exception
-// with, kept in tests/data/fuzz/<target>/, fed to its reader the way the harness feeds it: each must
-// now load or fail with a clean spacebvh::Error. Under the sanitizer build (scripts/test-sanitizers.sh)
+// with, and hand-written hostile inputs of the same kinds (sizes beyond the data, indices out of range,
+// NaN), kept in tests/data/fuzz/<target>/, fed to its reader the way the harness feeds it: each must
+// load or fail with a clean spacebvh::Error. Under the sanitizer build (scripts/test-sanitizers.sh)
 // this also checks that no memory error or undefined behaviour remains.
 #include <gtest/gtest.h>
 
