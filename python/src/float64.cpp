@@ -117,11 +117,16 @@ void bind_float64(py::module_& m) {
             },
             py::arg("origins"), py::arg("directions"), py::arg("tmin") = py::none(), py::arg("tmax") = py::none(),
             "Whether each ray hits anything for t in [tmin, tmax] (exact).")
-        .def_property_readonly("triangle_count", [](const PyTracer64& self) { return self.triangle_count; })
-        .def_property_readonly("frame_origin", [](const PyTracer64& self) {
-            const Vec3d& o = self.tracer->frame_origin();
-            return py::make_tuple(o[0], o[1], o[2]);
-        });
+        .def_property_readonly(
+            "triangle_count", [](const PyTracer64& self) { return self.triangle_count; }, "The number of triangles traced.")
+        .def_property_readonly(
+            "frame_origin",
+            [](const PyTracer64& self) {
+                const Vec3d& o = self.tracer->frame_origin();
+                return py::make_tuple(o[0], o[1], o[2]);
+            },
+            "The centre of the local frame the tree's float32 boxes are built in (float64 x, y, z in the "
+            "caller's frame); hits are decided on the float64 triangles, not in this frame.");
 }
 
 }  // namespace spacebvh::python
