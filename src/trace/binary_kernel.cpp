@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 #include <immintrin.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -333,9 +334,11 @@ BinaryLayout make_binary_layout(std::span<const Triangle> triangles, const Bvh& 
     }
     std::vector<CompactNode, HugePageAllocator<CompactNode>>& buffer = layout.buffer;
     buffer.resize((units * kUnit + sizeof(CompactNode) - 1) / sizeof(CompactNode));
-    std::memcpy(buffer.data(), parts.nodes.data(), parts.nodes.size() * sizeof(CompactNode));
-    std::memcpy(reinterpret_cast<char*>(buffer.data()) + node_units * kUnit, parts.packs.data(),
-                parts.packs.size() * sizeof(TrianglePack));
+    // std::copy, not memcpy: a tree without triangles has no packs, and memcpy from the null data()
+    // of an empty vector is undefined even for zero bytes.
+    std::copy(parts.nodes.begin(), parts.nodes.end(), buffer.begin());
+    std::copy(parts.packs.begin(), parts.packs.end(),
+              reinterpret_cast<TrianglePack*>(reinterpret_cast<char*>(buffer.data()) + node_units * kUnit));
     return layout;
 }
 
