@@ -95,11 +95,13 @@ void bind_float64(py::module_& m) {
                 const py::ssize_t n = py::ssize_t(hits.size());
                 py::array_t<double> t(n), u(n), v(n);
                 py::array_t<int64_t> primitive(n);
+                double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data();
+                int64_t* id_out = primitive.mutable_data();
                 for (py::ssize_t i = 0; i < n; ++i) {
-                    t.mutable_data()[i] = hits[i].t;
-                    primitive.mutable_data()[i] = hits[i].is_hit() ? int64_t(hits[i].primitive) : -1;
-                    u.mutable_data()[i] = hits[i].u;
-                    v.mutable_data()[i] = hits[i].v;
+                    t_out[i] = hits[i].t;
+                    id_out[i] = hits[i].is_hit() ? int64_t(hits[i].primitive) : -1;
+                    u_out[i] = hits[i].u;
+                    v_out[i] = hits[i].v;
                 }
                 return py::make_tuple(t, primitive, u, v);
             },
