@@ -45,6 +45,11 @@ void store_le(std::byte* p, T value) {
     if constexpr (!kLittleHost) value = byte_swap(value);
     std::memcpy(p, &value, sizeof value);
 }
+// memcpy of zero bytes is still undefined when a pointer is null, as an empty vector's or string's
+// data() may be (a tree without primitives, a builder without settings).
+void copy_bytes(void* to, const void* from, size_t count) {
+    if (count != 0) std::memcpy(to, from, count);
+}
 float load_f32(const std::byte* p) { return std::bit_cast<float>(load_le<uint32_t>(p)); }
 void store_f32(std::byte* p, float value) { store_le(p, std::bit_cast<uint32_t>(value)); }
 
@@ -294,11 +299,11 @@ std::vector<std::byte> serialize_bvh(const Bvh& bvh, std::span<const Triangle> t
     store_le(out + kAtLeafBlock, bvh.cost.leaf_block);
     store_le(out + kAtBuilderLength, uint32_t(bvh.builder.size()));
     store_le(out + kAtSettingsLength, uint32_t(settings.size()));
-    std::memcpy(out + layout.text, bvh.builder.data(), bvh.builder.size());
-    std::memcpy(out + layout.text + bvh.builder.size(), settings.data(), settings.size());
+    copy_bytes(out + layout.text, bvh.builder.data(), bvh.builder.size());
+    copy_bytes(out + layout.text + bvh.builder.size(), settings.data(), settings.size());
     if constexpr (kLittleHost) {
-        std::memcpy(out + layout.nodes, bvh.nodes.data(), bvh.nodes.size() * kNodeRecordSize);
-        std::memcpy(out + layout.primitives, bvh.primitives.data(), bvh.primitives.size() * kPrimitiveRecordSize);
+        copy_bytes(out + layout.nodes, bvh.nodes.data(), bvh.nodes.size() * kNodeRecordSize);
+        copy_bytes(out + layout.primitives, bvh.primitives.data(), bvh.primitives.size() * kPrimitiveRecordSize);
     } else {
         for (size_t i = 0; i < bvh.nodes.size(); ++i) store_node(out + layout.nodes + kNodeRecordSize * i, bvh.nodes[i]);
         for (size_t i = 0; i < bvh.primitives.size(); ++i)
@@ -403,8 +408,8 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
     bvh.nodes.resize(node_count);
     bvh.primitives.resize(primitive_count);
     if constexpr (kLittleHost) {
-        std::memcpy(bvh.nodes.data(), in + layout.nodes, node_count * kNodeRecordSize);
-        std::memcpy(bvh.primitives.data(), in + layout.primitives, primitive_count * kPrimitiveRecordSize);
+        copy_bytes(bvh.nodes.data(), in + layout.nodes, node_count * kNodeRecordSize);
+        copy_bytes(bvh.primitives.data(), in + layout.primitives, primitive_count * kPrimitiveRecordSize);
     } else {
         for (size_t i = 0; i < node_count; ++i) bvh.nodes[i] = load_node(in + layout.nodes + kNodeRecordSize * i);
         for (size_t i = 0; i < primitive_count; ++i)
