@@ -349,7 +349,7 @@ Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
         BuildConfig config = options;
         config.termination.reinsertion_iterations = 0;
         bvh = spacebvh::build(scene, config);
-        const Tracer built(scene, bvh);
+        const Tracer built(scene, bvh, Kernel::binary);  // no wide collapse to build
         config.termination = options.termination;
         config.termination.segments = termination_segments(scene, built, options.termination_rays, kTerminationSeed);
         optimize_for_termination(bvh, config.termination, config.limits.max_depth, config.hooks);
