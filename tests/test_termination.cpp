@@ -7,8 +7,11 @@
 #include "cli_support.hpp"
 #include "test_support.hpp"
 
+#include <cmath>
 #include <cstring>
 
+#include "builders/reinsertion_optimizer.hpp"
+#include "builders/termination_term.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/presets.hpp"
@@ -23,6 +26,19 @@ namespace {
 
 bool same_rays(const std::vector<Ray>& a, const std::vector<Ray>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Ray)) == 0);
+}
+
+// The termination-aware price of a tree, summed node by node over every segment: each inner node
+// costs the segments meeting its box plus `prior` times its area over the root's.
+double sampled_price(const Bvh& bvh, const std::vector<Ray>& segments, float prior) {
+    double price = 0.0;
+    const double root_area = area_in_double(bvh.root().bounds);
+    for (const BvhNode& node : bvh.nodes) {
+        if (node.is_leaf()) continue;
+        price += double(prior) * area_in_double(node.bounds) / root_area;
+        for (const Ray& ray : segments) price += builders::segment_meets(builders::SampleSegment::of(ray), node.bounds);
+    }
+    return price;
 }
 
 }  // namespace
@@ -96,6 +112,65 @@ TEST(TerminationAwareBuild, BadSegmentsAndSettingsThrow) {
     EXPECT_THROW((void)spacebvh::build(scene, options), Error);
 }
 
+// The reinsertion priced by the segments: the applied gains are the exact fall of the price summed
+// over the tree, which never rises (the refit alone only shrinks boxes), with and without the prior.
+TEST(TerminationReinsertion, GainsArePricedExactlyAndThePriceNeverRises) {
+    const Scene& scene = cached_builtin_scene("interior");
+    for (const float prior : {0.0f, 64.0f}) {
+        Bvh bvh = spacebvh::build(scene, config_for("spatial"));
+        const Tracer tracer(scene, bvh, Kernel::binary);
+        const std::vector<Ray> segments = termination_segments(scene, tracer, 3000, 4);
+        const double before = sampled_price(bvh, segments, prior);
+        builders::ReinsertionOptions options;
+        options.iterations = 8;
+        options.segments = segments;
+        options.area_prior = prior;
+        const builders::ReinsertionReport report = builders::optimize_by_reinsertion(bvh, options);
+        EXPECT_GT(report.moves, 10u) << prior;
+        EXPECT_NEAR(report.inner_area_before, before, 1e-9 * before) << prior;
+        EXPECT_LE(report.inner_area_refitted, report.inner_area_before) << prior;
+        const double after = sampled_price(bvh, segments, prior);
+        EXPECT_NEAR(report.inner_area_after, after, 1e-9 * before) << prior;
+        EXPECT_NEAR(report.inner_area_refitted - report.inner_area_after, report.applied_gain, 1e-9 * before) << prior;
+        EXPECT_LT(after, before) << prior;
+    }
+}
+
+TEST(TerminationReinsertion, ValidCorrectDeterministicAndOffWithoutIterations) {
+    const Scene soup = soup_prefix(6000);
+    for (const char* builder : {"spatial", "cbvh"}) {
+        BuildConfig options = config_for(builder);
+        const Bvh plain = spacebvh::build(soup, options);
+        options.termination.segments = termination_segments(soup, Tracer(soup, plain, Kernel::binary), 4000, 9);
+        options.termination.split_choice = false;
+        // The segments alone change nothing: the split choice is off and so is the reinsertion.
+        EXPECT_EQ(first_difference(spacebvh::build(soup, options), plain), "") << builder;
+        options.termination.reinsertion_iterations = 8;
+        const Bvh bvh = build_in_arena(2, soup, options);
+        EXPECT_EQ(bvh.builder, std::string(builder) + "+topt");
+        EXPECT_EQ(tree_violations(soup, bvh, options), "") << builder;
+        const Tracer tracer(soup, bvh, Kernel::binary);
+        EXPECT_EQ(wrong_against_arbiter(soup, tracer, probing_rays(soup, 1500, 17)), "") << builder;
+        EXPECT_EQ(first_difference(build_in_arena(1, soup, options), bvh), "") << builder << ": 1 vs 2 threads";
+        EXPECT_LT(sampled_price(bvh, options.termination.segments, 64.0f),
+                  sampled_price(plain, options.termination.segments, 64.0f)) << builder;
+    }
+}
+
+TEST(TerminationReinsertion, BadSettingsThrow) {
+    const Scene& scene = cached_builtin_scene("interior");
+    BuildConfig options = config_for("spatial");
+    options.termination.segments.resize(2, Ray{{0, 0, 0}, {1, 0, 0}, 0.0f, 1.0f});
+    options.termination.reinsertion_iterations = 2;
+    for (const float prior : {-1.0f, kInfinity, std::nanf("")}) {
+        options.termination.reinsertion_prior = prior;
+        EXPECT_THROW((void)spacebvh::build(scene, options), Error) << prior;
+    }
+    options.termination.reinsertion_prior = 64.0f;
+    options.termination.reinsertion_iterations = kMaxReinsertionIterations + 1;
+    EXPECT_THROW((void)spacebvh::build(scene, options), Error);
+}
+
 // The command line: `rays --kind bounce|area`, `--termination-rays` on build and `@trays=N` in compare
 // (answers checked by the arbiter), and clear errors for what does not apply.
 TEST_F(Cli, SampleRaysAndTerminationRays) {
@@ -115,4 +190,15 @@ TEST_F(Cli, SampleRaysAndTerminationRays) {
     expect_clean_failure("build builtin:soup --builder embree-high --termination-rays 100 --no-epo", {"termination-rays"});
     expect_clean_failure("build builtin:soup --termination-rays 100 --termination-candidates 0 --no-epo", {"termination candidates"});
     expect_clean_failure("rays builtin:soup --kind camera -o r.bin", {"camera"});
+    const CliResult optimized =
+        run("build builtin:soup --builder spatial --termination-rays 2000 --no-termination-split --termination-optimize 4 --no-epo");
+    ASSERT_EQ(optimized.exit_code, 0) << optimized.output;
+    EXPECT_NE(optimized.output.find("spatial+topt"), std::string::npos) << optimized.output;
+    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tsplit=0;topt=4;tprior=16' --embree medium "
+                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                                         3, rows));
+    for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
+    expect_clean_failure("build builtin:soup --termination-optimize 4 --no-epo", {"termination-rays"});
+    expect_clean_failure("compare builtin:soup --builders 'spatial@topt=4' --embree none --no-epo", {"topt needs trays"});
+    expect_clean_failure("build builtin:soup --termination-rays 10 --termination-prior -1 --no-epo", {"prior"});
 }

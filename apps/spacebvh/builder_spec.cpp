@@ -34,10 +34,15 @@ BuilderSpec parse_builder_spec(const std::string& text, const BuildCliOptions& d
             else if (key == "trays") spec.options.termination_rays = parse_unsigned(value, "trays");
             else if (key == "tn0") spec.options.termination.shrinkage = parse_float_or_inf(value, "tn0");
             else if (key == "tcand") spec.options.termination.candidates = parse_unsigned(value, "tcand");
+            else if (key == "tsplit") spec.options.termination.split_choice = parse_unsigned(value, "tsplit") != 0;
+            else if (key == "topt") spec.options.termination.reinsertion_iterations = parse_unsigned(value, "topt");
+            else if (key == "tprior") spec.options.termination.reinsertion_prior = parse_float_or_inf(value, "tprior");
             else throw Error("builder '" + text + "': unknown setting '" + key +
-                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize, trays, tn0, tcand)");
+                             "' (co, ct, ci, leaf, block, budget, bins, spatialbins, gate, search, grid, gridmax, lookahead, candidates, top, sweep, samples, optimize, trays, tn0, tcand, tsplit, topt, tprior)");
         }
         spec.options.validate();
+        if (spec.options.termination.reinsertion_iterations > 0 && spec.options.termination_rays == 0)
+            throw Error("builder '" + text + "': topt needs trays (the segments it prices nodes by)");
     }
     std::string name = text.substr(0, at);
     strip_optimize_suffix(name);

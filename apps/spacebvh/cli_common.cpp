@@ -120,6 +120,16 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     command.add_option("--termination-candidates", termination_candidates,
                        "cheapest splits per axis and search space the termination-aware cost chooses among")
         ->capture_default_str();
+    command.add_flag("--no-termination-split", no_termination_split,
+                     "the termination rays serve --termination-optimize only; the cost model chooses every split");
+    command.add_option("--termination-optimize", termination_optimize,
+                       "after the build, this many reinsertion iterations that price each inner node by the "
+                       "termination rays' segments meeting its box plus --termination-prior pseudo-rays spread by "
+                       "area (needs --termination-rays; 0 = off)")
+        ->capture_default_str();
+    command.add_option("--termination-prior", termination_prior,
+                       "--termination-optimize: pseudo-rays spread by area (the SAH's share of the price)")
+        ->capture_default_str();
     command.add_flag("--optimize", optimize,
                      "after the build, move subtrees to where they lower the tree SAH (reinsertion, Bittner et al. "
                      "2013); leaves stay as built; also as a builder name suffix: binned+opt");
@@ -192,6 +202,11 @@ TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
     options.termination_rays = termination_rays;
     options.termination.shrinkage = termination_shrinkage;
     options.termination.candidates = termination_candidates;
+    options.termination.split_choice = !no_termination_split;
+    options.termination.reinsertion_iterations = termination_optimize;
+    options.termination.reinsertion_prior = termination_prior;
+    if (termination_optimize > 0 && termination_rays == 0)
+        throw Error("--termination-optimize needs --termination-rays (the segments it prices nodes by)");
     const bool iterations_given = optimize_iterations_option && optimize_iterations_option->count() > 0;
     if (optimize || optimized_name || iterations_given) {
         if (optimize_iterations == 0) throw Error("--optimize-iterations must be at least 1");
@@ -329,6 +344,15 @@ Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
     Bvh bvh;
     if (is_embree_tree(options.builder)) {
         bvh = build_embree_tree(scene, options.builder, options);
+    } else if (options.termination_rays > 0 && !options.termination.split_choice) {
+        // The segments serve the reinsertion only: traced on the built tree itself, no quick tree.
+        BuildConfig config = options;
+        config.termination.reinsertion_iterations = 0;
+        bvh = spacebvh::build(scene, config);
+        const Tracer built(scene, bvh, Kernel::binary);  // no wide collapse to build
+        config.termination = options.termination;
+        config.termination.segments = termination_segments(scene, built, options.termination_rays, kTerminationSeed);
+        optimize_for_termination(bvh, config.termination, config.limits.max_depth, config.hooks);
     } else if (options.termination_rays > 0) {
         BuildConfig config = options;
         const Tracer quick(scene, spacebvh::build(scene, Quality::fast));

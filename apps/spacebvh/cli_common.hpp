@@ -60,6 +60,9 @@ struct BuildCliOptions {
     uint32_t termination_rays = 0;
     float termination_shrinkage = 32.0f;
     uint32_t termination_candidates = 4;
+    bool no_termination_split = false;
+    uint32_t termination_optimize = 0;
+    float termination_prior = 64.0f;
     bool optimize = false;  // reinsertion optimisation after the build
     uint32_t optimize_iterations = kDefaultReinsertionIterations;
     const CLI::Option* optimize_iterations_option = nullptr;  // given: implies --optimize

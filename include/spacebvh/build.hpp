@@ -123,6 +123,13 @@ struct TerminationConfig {
     float shrinkage = 32.0f;    // n_0 of the blend, >= 0
     uint32_t min_rays = 8;      // nodes met by fewer segments keep the cost model's choice (>= 1)
     uint32_t candidates = 4;    // the cheapest splits per axis and search space compared (1..16)
+    bool split_choice = true;   // off: the cost model chooses every split; the segments serve the optimiser only
+    // After the build (and any SAH reinsertion), subtree reinsertion that prices each inner node by the
+    // number of segments meeting its box - the sample's visits, each ray stopping at its first hit -
+    // plus `reinsertion_prior` pseudo-segments spread by area (the SAH's rays), where the SAH optimiser
+    // prices it by area alone: at most this many iterations (0 = off, at most kMaxReinsertionIterations).
+    uint32_t reinsertion_iterations = 0;
+    float reinsertion_prior = 64.0f;  // >= 0, finite
 };
 
 struct BuildHooks {
@@ -172,5 +179,12 @@ const char* to_string(Preset preset);  // "spatial"
 // if deeper). Deterministic for any thread count; throws Cancelled (tree unchanged) when cancelled.
 // Appends "+opt" to bvh.builder when it ran (iterations > 0).
 void optimize(Bvh& bvh, const ReinsertionConfig& reinsertion, uint32_t max_depth = 64, const BuildHooks& hooks = {});
+
+// The termination-aware reinsertion (TerminationConfig::reinsertion_iterations, priced by its
+// segments) of any binary tree, as build() runs it after the build; segments may come from tracing
+// this very tree. Never raises the sampled price; same guarantees as optimize. Appends "+topt" to
+// bvh.builder when it ran (iterations > 0 and segments given).
+void optimize_for_termination(Bvh& bvh, const TerminationConfig& termination, uint32_t max_depth = 64,
+                              const BuildHooks& hooks = {});
 
 }  // namespace spacebvh

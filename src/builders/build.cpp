@@ -25,6 +25,22 @@ void optimize(Bvh& bvh, const ReinsertionConfig& reinsertion, uint32_t max_depth
     bvh.builder += "+opt";
 }
 
+void optimize_for_termination(Bvh& bvh, const TerminationConfig& termination, uint32_t max_depth, const BuildHooks& hooks) {
+    if (termination.reinsertion_iterations > kMaxReinsertionIterations)
+        throw Error("termination reinsertion iterations must be in [0, " + std::to_string(kMaxReinsertionIterations) +
+                    "], got " + std::to_string(termination.reinsertion_iterations));
+    if (termination.reinsertion_iterations == 0 || termination.segments.empty()) return;
+    builders::ReinsertionOptions options;
+    options.iterations = termination.reinsertion_iterations;
+    options.max_depth = max_depth;
+    options.progress = hooks.progress;
+    options.cancel = hooks.cancel;
+    options.segments = termination.segments;
+    options.area_prior = termination.reinsertion_prior;
+    builders::optimize_by_reinsertion(bvh, options);
+    bvh.builder += "+topt";
+}
+
 Bvh build(const MeshView& mesh, const BuildConfig& config) {
     config.validate();
     builders::check_build_memory(mesh, config);
@@ -40,12 +56,13 @@ Bvh build(const MeshView& mesh, const BuildConfig& config) {
     driver.lookahead_candidates = config.lookahead.candidates;
     driver.lookahead_top_share = config.lookahead.top_share;
     // With the optimisation, the build reports the first half of the progress and the optimiser the rest.
-    const bool optimizing = config.reinsertion.iterations > 0;
+    const bool sampled_optimizing = config.termination.reinsertion_iterations > 0 && !config.termination.segments.empty();
+    const bool optimizing = config.reinsertion.iterations > 0 || sampled_optimizing;
     const auto& progress = config.hooks.progress;
     driver.progress = progress;
     if (optimizing && progress) driver.progress = [progress](double fraction) { progress(0.5 * fraction); };
     driver.cancel = config.hooks.cancel;
-    if (!config.termination.segments.empty()) driver.termination = &config.termination;
+    if (!config.termination.segments.empty() && config.termination.split_choice) driver.termination = &config.termination;
     const float gate = config.spatial.gate_alpha >= 0.0f ? config.spatial.gate_alpha : preset.spatial_gate_alpha;
     builders::TopDownBuilder builder(config.cost, {config.limits.max_leaf_size, config.limits.max_depth},
                                      builders::make_search_spaces(spaces, triangles, config, preset.allow_unsplitting, gate),
@@ -69,6 +86,7 @@ Bvh build(const MeshView& mesh, const BuildConfig& config) {
         BuildHooks hooks = config.hooks;
         if (progress) hooks.progress = [progress](double fraction) { progress(0.5 + 0.5 * fraction); };
         optimize(bvh, config.reinsertion, config.limits.max_depth, hooks);
+        if (sampled_optimizing) optimize_for_termination(bvh, config.termination, config.limits.max_depth, {{}, hooks.cancel});
         if (progress) progress(1.0);
     }
     return bvh;

@@ -62,6 +62,11 @@ void BuildConfig::validate() const {
     cost.validate();
     require(termination.shrinkage >= 0.0f && termination.shrinkage < kInfinity,
             "termination shrinkage must be finite and >= 0, got " + std::to_string(termination.shrinkage));
+    require(termination.reinsertion_prior >= 0.0f && termination.reinsertion_prior < kInfinity,
+            "termination reinsertion prior must be finite and >= 0, got " + std::to_string(termination.reinsertion_prior));
+    require(termination.reinsertion_iterations <= kMaxReinsertionIterations,
+            "termination reinsertion iterations must be in [0, " + std::to_string(kMaxReinsertionIterations) + "], got " +
+                std::to_string(termination.reinsertion_iterations));
     require(termination.min_rays >= 1, "termination min rays must be at least 1");
     require(termination.candidates >= 1 && termination.candidates <= 16,
             "termination candidates must be in [1, 16], got " + std::to_string(termination.candidates));

@@ -22,6 +22,13 @@
 // box is kept, so SA(root), the SAH's normaliser, never changes). A node whose search finds nothing
 // is settled: later batches pass it over until a move changes its parent, its subtree or a box
 // above it, so the batches work their way down from the largest nodes to where gains remain.
+// Termination-aware pricing (ReinsertionOptions::segments): an inner node's box is priced by the
+// number of sample segments that meet it - each segment ends where its ray stops, so this counts the
+// visits of the node by the sample - plus `area_prior` pseudo-segments spread by area (the SAH's
+// isotropic rays) where few segments reach. Every formula above needs only that the price of a box
+// never falls when the box grows, which both terms satisfy; the gains stay exact for this price.
+// Each node keeps the list of segments meeting its box, so a box inside it is priced among those.
+//
 // Iterations stop at the cap, when no node is left unsettled, or when the last 20 (5 % each: a batch's
 // worth of every node) together gain less than 0.01 % of the inner nodes' area. Every applied move lowers the SAH, so the result is never worse
 // than the input, and the same input gives the same tree for any thread count.
@@ -30,6 +37,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <span>
 
 #include "spacebvh/bvh.hpp"
 
@@ -42,12 +50,17 @@ struct ReinsertionOptions {
     uint32_t max_depth = 64;
     std::function<void(double)> progress;       // fraction of the iterations done; may be empty
     const std::atomic<bool>* cancel = nullptr;  // polled between searches; when set, throws Cancelled
+    // Non-empty: price inner nodes by these sample segments (tmin to where each ray stops) and
+    // `area_prior` pseudo-segments spread by area, instead of by area alone (the SAH).
+    std::span<const Ray> segments;
+    float area_prior = 0.0f;
 };
 
 struct ReinsertionReport {
     uint32_t iterations = 0;  // batches run
     size_t moves = 0;         // moves applied
-    // Sum of the inner nodes' areas (the part of the tree SAH that moves change): as built, after
+    // Sum of the inner nodes' areas (the part of the tree SAH that moves change; with segments, their
+    // prices: sampled visits plus the prior's share): as built, after
     // the first refit (tight boxes), and at the end; and the gains of the applied moves as priced
     // (refitted - after, up to rounding).
     double inner_area_before = 0, inner_area_refitted = 0, inner_area_after = 0;

@@ -10,33 +10,18 @@ TerminationTerm::TerminationTerm(const TerminationConfig& config)
     : shrinkage_(config.shrinkage), min_rays_(config.min_rays), candidates_(config.candidates) {
     segments_.reserve(config.segments.size());
     for (const Ray& ray : config.segments)
-        segments_.push_back({ray.org, Vec3(1.0f / ray.dir.x, 1.0f / ray.dir.y, 1.0f / ray.dir.z), ray.tmin, ray.tmax});
-}
-
-// Slab test (Kay & Kajiya 1986) over [tmin, tmax]; a zero direction component gives infinite
-// inverses, and the NaN of 0 * inf (origin on a slab plane) is dropped by std::max/min keeping their
-// first argument when the comparison is false.
-bool TerminationTerm::meets(const Segment& s, const AABB& box) const {
-    if (box.is_empty()) return false;
-    float near = s.tmin, far = s.tmax;
-    for (int axis = 0; axis < 3; ++axis) {
-        const float t0 = (box.lo[axis] - s.org[axis]) * s.inverse_dir[axis];
-        const float t1 = (box.hi[axis] - s.org[axis]) * s.inverse_dir[axis];
-        near = std::max(near, std::min(t0, t1));  // a NaN second argument leaves near
-        far = std::min(far, std::max(t0, t1));
-    }
-    return near <= far;
+        segments_.push_back(SampleSegment::of(ray));
 }
 
 std::vector<uint32_t> TerminationTerm::meeting(const AABB& box, const std::vector<uint32_t>* candidates) const {
     std::vector<uint32_t> result;
     if (!candidates) {
         for (uint32_t i = 0; i < segments_.size(); ++i)
-            if (meets(segments_[i], box)) result.push_back(i);
+            if (segment_meets(segments_[i], box)) result.push_back(i);
         return result;
     }
     for (uint32_t i : *candidates)
-        if (meets(segments_[i], box)) result.push_back(i);
+        if (segment_meets(segments_[i], box)) result.push_back(i);
     return result;
 }
 
@@ -44,8 +29,8 @@ float TerminationTerm::blended_cost(const Split& split, std::span<const uint32_t
     if (rays.empty()) return split.cost;
     size_t left = 0, right = 0;
     for (uint32_t i : rays) {
-        left += meets(segments_[i], split.left_bounds);
-        right += meets(segments_[i], split.right_bounds);
+        left += segment_meets(segments_[i], split.left_bounds);
+        right += segment_meets(segments_[i], split.right_bounds);
     }
     const double n = double(rays.size());
     const double sampled = double(cost.traversal_cost) +

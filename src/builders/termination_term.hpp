@@ -4,6 +4,7 @@
 // choice among the search spaces' candidates by the blend of that term with the cost model's cost.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -13,6 +14,31 @@
 #include "spacebvh/build.hpp"
 
 namespace spacebvh::builders {
+
+// A sample ray's segment, from tmin to where the ray stops, with its inverse direction for slab tests.
+struct SampleSegment {
+    Vec3 org, inverse_dir;
+    float tmin, tmax;
+    static SampleSegment of(const Ray& ray) {
+        return {ray.org, Vec3(1.0f / ray.dir.x, 1.0f / ray.dir.y, 1.0f / ray.dir.z), ray.tmin, ray.tmax};
+    }
+};
+// Whether the segment meets the box. Monotone: a segment that meets a box meets every box containing it
+// (each slab bound enters through rounded, monotone operations), which the optimiser's bounds rely on.
+// Slab test (Kay & Kajiya 1986) over [tmin, tmax]; a zero direction component gives infinite
+// inverses, and the NaN of 0 * inf (origin on a slab plane) is dropped by std::max/min keeping their
+// first argument when the comparison is false.
+inline bool segment_meets(const SampleSegment& s, const AABB& box) {
+    if (box.is_empty()) return false;
+    float near = s.tmin, far = s.tmax;
+    for (int axis = 0; axis < 3; ++axis) {
+        const float t0 = (box.lo[axis] - s.org[axis]) * s.inverse_dir[axis];
+        const float t1 = (box.hi[axis] - s.org[axis]) * s.inverse_dir[axis];
+        near = std::max(near, std::min(t0, t1));  // a NaN second argument leaves near
+        far = std::min(far, std::max(t0, t1));
+    }
+    return near <= far;
+}
 
 class TerminationTerm {
 public:
@@ -34,13 +60,7 @@ public:
     float blended_cost(const Split& split, std::span<const uint32_t> rays, const CostModel& cost) const;
 
 private:
-    struct Segment {
-        Vec3 org, inverse_dir;
-        float tmin, tmax;
-    };
-    bool meets(const Segment& segment, const AABB& box) const;
-
-    std::vector<Segment> segments_;
+    std::vector<SampleSegment> segments_;
     float shrinkage_;
     uint32_t min_rays_, candidates_;
 };
