@@ -38,8 +38,8 @@ using testing_support::occlusion_records;
 
 namespace {
 
-// Every kernel by its full name, and the widest node test of each family also over Embree's
-// largest-area collapse ("@area"; the others use the SAH-optimal one).
+// Every kernel by its full name (the +moller leaf test included), and the widest node test of each
+// family also over Embree's largest-area collapse ("@area"; the others use the SAH-optimal one).
 std::vector<std::string> explicit_kernels() {
     std::vector<std::string> kernels;
     for (const std::string& name : kernel_names())
@@ -47,7 +47,7 @@ std::vector<std::string> explicit_kernels() {
     for (const std::string family : {"bvh4-", "bvh8-", "packet8-", "packet16-"}) {
         std::string widest;
         for (const std::string& name : kernel_names())
-            if (name.rfind(family, 0) == 0) widest = name;
+            if (name.rfind(family, 0) == 0 && name.find('+') == std::string::npos) widest = name;
         if (!widest.empty()) kernels.push_back(widest + "@area");
     }
     return kernels;
@@ -252,6 +252,14 @@ TEST(Kernels, BadChoicesAreClearErrors) {
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::sse}), Error);
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 257}), Error);
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh8, NodeTest::best, WideCollapse::sah_optimal, 64}), Error);
+    // The moller leaf test: single-ray bvh4 and bvh8 kernels only.
+    EXPECT_THROW(make_tracer("packet8+moller", scene, bvh), Error);
+    EXPECT_THROW(make_tracer("binary+moller", scene, bvh), Error);
+    EXPECT_THROW(make_tracer("bvh8-scalar+moller", scene, bvh), Error);
+    EXPECT_THROW(make_tracer("bvh8+woop", scene, bvh), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet16, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::moller}),
+                 Error);
+    EXPECT_EQ(make_tracer("bvh8+moller@area", scene, bvh)->config().leaf_test, LeafTest::moller);
     try {
         make_tracer("warp", scene, bvh);
         FAIL() << "no error";

@@ -72,6 +72,12 @@ void add_trace_command(CLI::App& app) {
                         double(stats.triangles_tested) / n);
             json["nodes_per_ray"] = double(stats.nodes_visited) / n;
             json["triangles_per_ray"] = double(stats.triangles_tested) / n;
+            if (stats.exact_tests || stats.plane_distances) {
+                std::printf("per ray: %.4f exact tests, %.4f double-precision distances\n", double(stats.exact_tests) / n,
+                            double(stats.plane_distances) / n);
+                json["exact_tests_per_ray"] = double(stats.exact_tests) / n;
+                json["plane_distances_per_ray"] = double(stats.plane_distances) / n;
+            }
         }
         write_json(options->common.json_path, json);
     });

@@ -31,7 +31,8 @@ std::string search_space_names(uint32_t search_spaces);
 
 // Kernel names: "auto"; "binary"; "bvh4", "bvh8" (widest node test) or "bvh4-NODETEST" /
 // "bvh8-NODETEST" with NODETEST one of scalar, sse, avx2, avx512; "packet8", "packet16" (also with
-// "-NODETEST"); wide and packet kernels also "NAME@area" (Embree's collapse) or "NAME@sah".
+// "-NODETEST"); bvh4 and bvh8 kernels (not -scalar) also "NAME+moller" (the moller leaf test); wide
+// and packet kernels also "NAME@area" (Embree's collapse) or "NAME@sah".
 // Throws Error for an unknown name, listing the kernels of this CPU.
 TracerConfig parse_kernel(const std::string& name);
 // The names parse_kernel accepts on this CPU (without the @ suffixes).

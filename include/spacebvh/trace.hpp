@@ -28,9 +28,15 @@ struct Hit {
 struct TraversalStats {
     uint64_t nodes_visited = 0;     // child boxes tested
     uint64_t triangles_tested = 0;  // ray-triangle tests
+    // Where the float leaf test could not decide a triangle alone (single-ray wide kernels): the
+    // exact test settled its edges, or its distance was taken from the plane equation in double.
+    uint64_t exact_tests = 0;
+    uint64_t plane_distances = 0;
     TraversalStats& operator+=(const TraversalStats& o) {
         nodes_visited += o.nodes_visited;
         triangles_tested += o.triangles_tested;
+        exact_tests += o.exact_tests;
+        plane_distances += o.plane_distances;
         return *this;
     }
 };
@@ -55,6 +61,16 @@ enum class NodeTest {
     avx512,  // AVX-512VL mask compares and compress-store of the hit children (width 4 and 8)
 };
 
+// The leaf test of the single-ray wide kernels. Both give the exact arbiter's answers.
+enum class LeafTest {
+    // Woop, Benthin, Wald 2013 in float with an error bound, exact fallback (watertight_triangle.hpp).
+    watertight,
+    // Moller-Trumbore on precomputed normals with a static error bound on every decision, the same
+    // exact fallback (moller_filter.hpp, docs/leaf-test.md); leaf data 224 bytes per four triangles
+    // instead of 160.
+    moller,
+};
+
 // How a binary tree is collapsed into wide nodes.
 enum class WideCollapse {
     // Ylitie, Karras, Laine 2017: the cheapest cut of the binary tree into wide nodes under a wide
@@ -69,11 +85,13 @@ struct TracerConfig {
     NodeTest node_test = NodeTest::best;               // wide and packet kernels
     WideCollapse collapse = WideCollapse::sah_optimal;  // wide and packet kernels
     uint32_t packet_size = 0;  // packet kernels: rays per packet, 1..256; 0 = the kernel's tile (64, 256)
+    LeafTest leaf_test = LeafTest::watertight;  // bvh4 and bvh8 only
 };
 
 const char* to_string(Kernel kernel);          // "bvh8"
 const char* to_string(NodeTest test);          // "avx2"
 const char* to_string(WideCollapse collapse);  // "sah", "area"
+const char* to_string(LeafTest leaf_test);      // "watertight", "moller"
 // The node tests available for `width` (4 or 8) on this CPU, "best" excluded, slowest first.
 std::vector<NodeTest> supported_node_tests(int width);
 
@@ -102,7 +120,7 @@ public:
 
     size_t memory_bytes() const;  // nodes + leaf triangle data
     size_t node_count() const;    // nodes of the layout
-    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "packet8-avx512@area"
+    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "packet8-avx512@area"
     const TracerConfig& config() const;  // with node_test resolved
 
     struct Impl;

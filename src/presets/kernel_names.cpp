@@ -13,7 +13,8 @@ int width_of(Kernel kernel) { return kernel == Kernel::bvh4 ? 4 : 8; }
 }  // namespace
 
 TracerConfig parse_kernel(const std::string& name) {
-    // A wide kernel may end in "@area": Embree's collapse instead of the SAH-optimal one.
+    // A wide kernel may end in "@area": Embree's collapse instead of the SAH-optimal one; a bvh4 or
+    // bvh8 kernel's name may end (before the @) in "+moller": the moller leaf test.
     std::string kernel = name;
     TracerConfig config;
     bool collapse_given = false;
@@ -24,8 +25,15 @@ TracerConfig parse_kernel(const std::string& name) {
         else if (suffix != "sah") throw Error("unknown kernel '" + name + "': a wide kernel takes a collapse, @sah or @area");
         collapse_given = true;
     }
+    if (const size_t plus = kernel.find('+'); plus != std::string::npos) {
+        const std::string suffix = kernel.substr(plus + 1);
+        kernel.resize(plus);
+        if (suffix != "moller" || !(kernel.rfind("bvh4", 0) == 0 || kernel.rfind("bvh8", 0) == 0) || kernel.find("scalar") != std::string::npos)
+            throw Error("unknown kernel '" + name + "': only bvh4 and bvh8 kernels (not -scalar) take a leaf test, +moller");
+        config.leaf_test = LeafTest::moller;
+    }
     if (kernel == "binary" && !collapse_given) return TracerConfig{Kernel::binary};
-    if (kernel == "auto") return TracerConfig{Kernel::automatic, NodeTest::best, config.collapse};
+    if (kernel == "auto") return TracerConfig{Kernel::automatic, NodeTest::best, config.collapse, 0, config.leaf_test};
     for (Kernel wide : kWideKernels) {
         const std::string prefix = to_string(wide);
         config.kernel = wide;
@@ -49,6 +57,12 @@ std::vector<std::string> kernel_names() {
         for (NodeTest test : supported_node_tests(width_of(wide)))
             if (!((wide == Kernel::packet8 || wide == Kernel::packet16) && test == NodeTest::sse))
                 names.push_back(prefix + "-" + to_string(test));
+    }
+    for (Kernel wide : {Kernel::bvh4, Kernel::bvh8}) {
+        const std::string prefix = to_string(wide);
+        names.push_back(prefix + "+moller");
+        for (NodeTest test : supported_node_tests(width_of(wide)))
+            if (test != NodeTest::scalar) names.push_back(prefix + "-" + to_string(test) + "+moller");
     }
     return names;
 }

@@ -16,6 +16,19 @@ struct Kernels {
     static bool occluded_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
         return traverse<S, true, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
     }
+    // The same over the moller leaf test (moller_filter.hpp).
+    static bool closest_moller(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, false, false, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, nullptr);
+    }
+    static bool closest_moller_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, false, true, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
+    }
+    static bool occluded_moller(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, true, false, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, nullptr);
+    }
+    static bool occluded_moller_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, true, true, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
+    }
     static void packet_closest(const void* layout, const Ray* rays, uint32_t count, Hit* hits, TraversalStats* stats) {
         const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
         if (stats) trace_packet<S, false, true>(wide, rays, count, hits, nullptr, stats);

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "trace/kernels.hpp"
+#include "trace/moller_filter.hpp"
 #include "trace/traversal_common.hpp"
 #include "trace/visit_order.hpp"
 #include "trace/watertight_triangle.hpp"
@@ -235,7 +236,9 @@ bool width_has(int width, NodeTest test) {
 
 namespace {
 template <class K>
-constexpr SingleRayKernels table_of() {
+constexpr SingleRayKernels table_of(LeafTest leaf_test) {
+    if (leaf_test == LeafTest::moller)
+        return {&K::closest_moller, &K::closest_moller_stats, &K::occluded_moller, &K::occluded_moller_stats};
     return {&K::closest, &K::closest_stats, &K::occluded, &K::occluded_stats};
 }
 template <class K>
@@ -244,18 +247,18 @@ constexpr PacketKernels packet_table_of() {
 }
 }  // namespace
 
-SingleRayKernels single_ray_kernels(int width, NodeTest test) {
+SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test) {
     if (width == 4) {
         switch (test) {
-            case NodeTest::sse: return table_of<sse_kernels::Kernels<sse_kernels::Policy>>();
-            case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<4>>>();
-            default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<4>>>();
+            case NodeTest::sse: return table_of<sse_kernels::Kernels<sse_kernels::Policy>>(leaf_test);
+            case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<4>>>(leaf_test);
+            default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<4>>>(leaf_test);
         }
     }
     switch (test) {
-        case NodeTest::avx2: return table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>();
-        case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>();
-        default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>();
+        case NodeTest::avx2: return table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
+        case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
+        default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
     }
 }
 

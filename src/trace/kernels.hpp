@@ -19,7 +19,7 @@ struct SingleRayKernels {
     bool (*occluded)(const void* layout, const Ray& ray, Hit& hit);
     bool (*occluded_stats)(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats);
 };
-SingleRayKernels single_ray_kernels(int width, NodeTest test);
+SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test = LeafTest::watertight);
 
 // A packet of `count` (<= kMaxPacket) rays over a WideLayout<8>. Stats may be null.
 inline constexpr uint32_t kMaxPacket = 256;

@@ -40,6 +40,8 @@ const char* to_string(NodeTest test) {
 
 const char* to_string(WideCollapse collapse) { return collapse == WideCollapse::sah_optimal ? "sah" : "area"; }
 
+const char* to_string(LeafTest leaf_test) { return leaf_test == LeafTest::moller ? "moller" : "watertight"; }
+
 std::vector<NodeTest> supported_node_tests(int width) {
     std::vector<NodeTest> tests;
     for (NodeTest test : {NodeTest::scalar, NodeTest::sse, NodeTest::avx2, NodeTest::avx512})
@@ -96,6 +98,9 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
                     std::to_string(config.packet_size));
     const TriangleStore store(mesh);
     check_belongs(store.triangles(), bvh);
+    if (config.leaf_test != LeafTest::watertight && (width == 2 || packet_size))
+        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no leaf test '" + to_string(config.leaf_test) +
+                    "' (bvh4 and bvh8 only)");
     if (width == 2) {
         if (config.node_test != NodeTest::best || config.collapse != WideCollapse::sah_optimal)
             throw Error("the binary kernel takes no node test and no collapse");
@@ -108,11 +113,14 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
                         to_string(config.node_test) + "'");
         if (!trace::cpu_has(config.node_test))
             throw Error(std::string("this CPU lacks the instructions of node test '") + to_string(config.node_test) + "'");
+        const auto add_planes = [&](auto& layout) {
+            if (config.leaf_test == LeafTest::moller) layout.planes = trace::make_pack_planes(layout.packs);
+        };
         if (width == 4)
-            impl_->layout.emplace<1>(trace::collapse_to_wide<4>(store.triangles(), bvh, config.collapse));
+            add_planes(impl_->layout.emplace<1>(trace::collapse_to_wide<4>(store.triangles(), bvh, config.collapse)));
         else
-            impl_->layout.emplace<2>(trace::collapse_to_wide<8>(store.triangles(), bvh, config.collapse));
-        impl_->single = trace::single_ray_kernels(width, config.node_test);
+            add_planes(impl_->layout.emplace<2>(trace::collapse_to_wide<8>(store.triangles(), bvh, config.collapse)));
+        impl_->single = trace::single_ray_kernels(width, config.node_test, config.leaf_test);
         if (packet_size) impl_->packets = trace::packet_kernels(config.node_test);
     }
     impl_->packet_size = packet_size;
@@ -201,7 +209,8 @@ size_t Tracer::memory_bytes() const {
         if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
             return layout.buffer.size() * sizeof(layout.buffer[0]);
         else
-            return layout.nodes.size() * sizeof(layout.nodes[0]) + layout.packs.size() * sizeof(trace::TrianglePack);
+            return layout.nodes.size() * sizeof(layout.nodes[0]) + layout.packs.size() * sizeof(trace::TrianglePack) +
+                   layout.planes.size() * sizeof(trace::PackPlanes);
     }, impl_->layout);
 }
 
@@ -219,6 +228,7 @@ std::string Tracer::name() const {
     std::string name = to_string(c.kernel);
     if (c.kernel != Kernel::binary) name += std::string("-") + to_string(c.node_test);
     if (impl_->packet_size && impl_->packet_size != packet_size_of(c.kernel)) name += "-x" + std::to_string(impl_->packet_size);
+    if (c.leaf_test != LeafTest::watertight) name += std::string("+") + to_string(c.leaf_test);
     if (c.collapse != WideCollapse::sah_optimal) name += std::string("@") + to_string(c.collapse);
     return name;
 }

@@ -124,7 +124,7 @@ private:
 // thread's oneTBB arena, in the standard floating-point mode; stats are summed exactly (integers).
 template <typename Trace>
 void for_each_range(size_t count, size_t grain, TraversalStats* stats, Trace&& trace) {
-    std::atomic<uint64_t> nodes{0}, triangles{0};
+    std::atomic<uint64_t> nodes{0}, triangles{0}, exact{0}, plane{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, grain), [&](const tbb::blocked_range<size_t>& range) {
         const StandardFloatingPointMode mode;
         TraversalStats local;
@@ -132,9 +132,11 @@ void for_each_range(size_t count, size_t grain, TraversalStats* stats, Trace&& t
         if (stats) {
             nodes += local.nodes_visited;
             triangles += local.triangles_tested;
+            exact += local.exact_tests;
+            plane += local.plane_distances;
         }
     });
-    if (stats) *stats = {nodes.load(), triangles.load()};
+    if (stats) *stats = {nodes.load(), triangles.load(), exact.load(), plane.load()};
 }
 
 // Runs `trace(i, stats)` for every ray, in chunks of 1024 rays.

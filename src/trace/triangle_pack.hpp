@@ -140,6 +140,30 @@ struct PackEdges {
     for (int k = 0; k < 3; ++k) vertex[k] = {pack.vertex[k][0][lane], pack.vertex[k][1][lane], pack.vertex[k][2][lane]};
 }
 
+// The per-lane path of both leaf tests (this one and moller_filter.hpp): the exact test for a lane
+// whose edges the float test could not decide, the double-precision distance for one certainly
+// inside. u, v, w: the lane's edge functions, weights of v0, v1, v2 times det (for the barycentrics).
+// Narrows `tmax` and fills `hit` on a closer hit; returns true when the ray is done (any hit).
+template <bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool settle_lane(const TrianglePack& pack, int lane, bool inside, float u, float v, float w,
+                                               const Ray& ray, float& tmax, Hit& hit, bool& found, TraversalStats* stats) {
+    Vec3 vertex[3];
+    pack_triangle(pack, lane, vertex);
+    if constexpr (kStats) {
+        if (inside) ++stats->plane_distances;
+        else ++stats->exact_tests;
+    }
+    TriangleHit candidate;
+    const bool crossed = inside ? finish_crossing(ray, vertex[0], vertex[1], vertex[2], tmax, u, v, w, candidate)
+                                : decide_exactly(ray, vertex[0], vertex[1], vertex[2], tmax, u, v, w, candidate);
+    if (!crossed) return false;
+    found = true;
+    if constexpr (kAnyHit) return true;
+    tmax = candidate.t;
+    hit = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+    return false;
+}
+
 // Tests a leaf's `count` lanes (from pack `first`) in lane order, so a hit at equal distance resolves
 // the same way in every kernel that shares the packing. kScalarTriangles tests them one at a time with the scalar
 // test (the reference kernels). Narrows `tmax` and fills `hit` on each closer hit; returns true on a
@@ -170,17 +194,9 @@ template <bool kScalarTriangles, bool kAnyHit, bool kStats>
             while (candidates) {
                 const int lane = __builtin_ctz(candidates);
                 candidates &= candidates - 1;
-                Vec3 vertex[3];
-                pack_triangle(pack, lane, vertex);
-                const bool crossed =
-                    (edges.inside >> lane) & 1
-                        ? finish_crossing(ray, vertex[0], vertex[1], vertex[2], tmax, edges.u[lane], edges.v[lane], edges.w[lane], candidate)
-                        : decide_exactly(ray, vertex[0], vertex[1], vertex[2], tmax, edges.u[lane], edges.v[lane], edges.w[lane], candidate);
-                if (!crossed) continue;
-                found = true;
-                if constexpr (kAnyHit) return true;
-                tmax = candidate.t;
-                hit = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+                if (settle_lane<kAnyHit, kStats>(pack, lane, (edges.inside >> lane) & 1, edges.u[lane], edges.v[lane], edges.w[lane],
+                                                 ray, tmax, hit, found, stats))
+                    return true;
             }
         }
     }

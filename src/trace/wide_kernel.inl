@@ -108,20 +108,27 @@ template <int W>
 
 // Starts fetching a child the ray will visit soon: an inner node's four lines, or the first triangle
 // pack of a leaf (three lines); traversal is bound by the latency of these fetches.
+// With the moller leaf test (`planes` not null), the leaf's planes line too.
 template <int W>
-[[gnu::always_inline]] inline void prefetch_child(const WideNode<W>* nodes, const TrianglePack* packs, uint32_t child,
-                                                  uint32_t count) {
+[[gnu::always_inline]] inline void prefetch_child(const WideNode<W>* nodes, const TrianglePack* packs, const PackPlanes* planes,
+                                                  uint32_t child, uint32_t count) {
     if (count == 0) {
         prefetch_node(nodes[child]);
     } else {
         prefetch_pack(packs[child]);
+        if (planes) prefetch_pack_planes(planes[child]);
     }
 }
 
+// The per-ray constants of the leaf test that a kernel without the moller test does not need.
+struct NoMollerRay {
+    explicit NoMollerRay(const Ray&) {}
+};
+
 // Closest hit (kAnyHit = false) or any hit. Children a ray enters are visited nearest first; entries
 // on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
-// skipped when popped.
-template <class S, bool kAnyHit, bool kStats>
+// skipped when popped. kMoller: leaves take the moller leaf test (moller_filter.hpp) on layout.planes.
+template <class S, bool kAnyHit, bool kStats, bool kMoller = false>
 bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     const RayBoxes<S> boxes(ray);
@@ -129,6 +136,8 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
     // load them from memory at every node of a closest-hit walk.
     const WideNode<W>* const nodes = layout.nodes.data();
     const TrianglePack* const packs = layout.packs.data();
+    const PackPlanes* const planes = kMoller ? layout.planes.data() : nullptr;
+    const std::conditional_t<kMoller, MollerRay, NoMollerRay> moller(ray);
     const float tmin = ray.tmin;
     // The triangle test's per-ray constants (three divisions) are made when the ray reaches its first
     // leaf: many rays (random rays around a small object) never do.
@@ -178,15 +187,15 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                         stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
                     }
                     current = {node.child[farthest], node.count[farthest], entry[farthest]};
-                    prefetch_child(nodes, packs, current.child, current.count);
-                    if (top > 0) prefetch_child(nodes, packs, stack[top - 1].child, stack[top - 1].count);
+                    prefetch_child(nodes, packs, planes, current.child, current.count);
+                    if (top > 0) prefetch_child(nodes, packs, planes, stack[top - 1].child, stack[top - 1].count);
                     continue;
                 }
                 const uint32_t first = uint32_t(__builtin_ctz(mask));
                 mask &= mask - 1;
                 if (mask == 0) {
                     current = {node.child[first], node.count[first], entry[first]};
-                    prefetch_child(nodes, packs, current.child, current.count);
+                    prefetch_child(nodes, packs, planes, current.child, current.count);
                     continue;
                 }
                 const uint32_t second = uint32_t(__builtin_ctz(mask));
@@ -221,19 +230,26 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
                     const uint32_t lane = visit_key_slot(key[0]);
                     current = {node.child[lane], node.count[lane], entry[lane]};
                 }
-                prefetch_child(nodes, packs, current.child, current.count);
+                prefetch_child(nodes, packs, planes, current.child, current.count);
                 // The next pop is likely soon: fetch it too.
-                prefetch_child(nodes, packs, stack[top - 1].child, stack[top - 1].count);
+                prefetch_child(nodes, packs, planes, stack[top - 1].child, stack[top - 1].count);
                 continue;
             }
         } else {
-            if (!sheared) {
-                shear = WatertightRay(ray);
-                pack_ray = PackRay(shear);
-                sheared = true;
+            if constexpr (kMoller) {
+                if (test_leaf_moller<kAnyHit, kStats>(packs, planes, current.child, current.count, ray, moller, tmax, hit, found,
+                                                      stats))
+                    return true;
+            } else {
+                if (!sheared) {
+                    shear = WatertightRay(ray);
+                    pack_ray = PackRay(shear);
+                    sheared = true;
+                }
+                if (test_leaf<S, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax, hit, found,
+                                                  stats))
+                    return true;
             }
-            if (test_leaf<S, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax, hit, found, stats))
-                return true;
         }
         // Pop the nearest pending subtree that may still hold a closer hit.
         do {

@@ -11,6 +11,7 @@
 #include "spacebvh/geometry.hpp"
 #include "trace/huge_page_allocator.hpp"
 #include "spacebvh/trace.hpp"
+#include "trace/moller_filter.hpp"
 #include "trace/triangle_pack.hpp"
 
 namespace spacebvh::trace {
@@ -36,6 +37,7 @@ template <int W>
 struct WideLayout {
     std::vector<WideNode<W>, HugePageAllocator<WideNode<W>>> nodes;  // nodes[0] is the root
     TrianglePacks packs;
+    PackPlanesList planes;  // the moller leaf test's normals, planes[i] for packs[i]; empty without it
 };
 
 // Collapses the binary tree into wide nodes, choosing each node's children by `collapse`
