@@ -3,7 +3,7 @@
 # Runs each fuzz harness (fuzz/) for at least FUZZ_RUNS executions (default 10^6) with ASan+UBSan and
 # prints, per harness, the executions, crashes, leaks, timeouts and out-of-memory stops. A harness
 # that stops on a finding is restarted (its corpus kept) until the executions are reached, at most
-# FUZZ_MAX_STOPS times; each finding's input is in build-fuzz/artifacts/<target>/.
+# FUZZ_MAX_STOPS times; each finding's input is in build-sanitized/artifacts/<target>/.
 # Usage: bash bench/fuzz.sh [TARGET...]   (default: every target; FUZZ_RUNS, FUZZ_MAX_STOPS=20)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,19 +14,19 @@ targets=("$@")
 [ -n "${FUZZ_SKIP_BUILD:-}" ] || bash scripts/fuzz-build.sh >/dev/null
 printf '%-13s %10s %8s %6s %9s %5s %7s\n' target executions crashes leaks timeouts ooms seconds
 for target in "${targets[@]}"; do
-  corpus=build-fuzz/corpus/$target artifacts=build-fuzz/artifacts/$target
+  corpus=build-sanitized/corpus/$target artifacts=build-sanitized/artifacts/$target
   mkdir -p "$corpus" "$artifacts"
-  inputs=("$corpus" "build-fuzz/seeds/$target")
+  inputs=("$corpus" "build-sanitized/seeds/$target")
   [ -d "tests/data/fuzz/$target" ] && inputs+=("tests/data/fuzz/$target")
   executed=0 crashes=0 leaks=0 timeouts=0 ooms=0 stops=0 start=$SECONDS
   while [ "$executed" -lt "$goal" ] && [ "$stops" -lt "$max_stops" ]; do
-    log=build-fuzz/bench-$target.log
-    if build-fuzz/fuzz/fuzz_"$target" -runs=$((goal - executed)) -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=512 \
+    log=build-sanitized/bench-$target.log
+    if build-sanitized/fuzz/fuzz_"$target" -runs=$((goal - executed)) -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=512 \
          -dict="fuzz/dict/$target.dict" -artifact_prefix="$artifacts/" -print_final_stats=1 "${inputs[@]}" >"$log" 2>&1; then
       :
     else
       stops=$((stops + 1))
-      cp "$log" "build-fuzz/bench-$target-stop$stops.log"
+      cp "$log" "build-sanitized/bench-$target-stop$stops.log"
       if grep -q 'ERROR: LeakSanitizer' "$log"; then leaks=$((leaks + 1))
       elif grep -q 'ERROR: libFuzzer: timeout' "$log"; then timeouts=$((timeouts + 1))
       elif grep -qE 'ERROR: libFuzzer: (out-of-memory|malloc)' "$log"; then ooms=$((ooms + 1))
