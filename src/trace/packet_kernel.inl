@@ -35,6 +35,46 @@ struct PacketRaysSoA {
     alignas(64) float shear_y[kMaxPacket];
 };
 
+// Rays base .. base + 7 into the SoA arrays. A Ray is eight floats (origin, direction, tmin, tmax),
+// so with 8-lane AVX the eight rays are an 8 x 8 transpose in registers (24 shuffles); the copy
+// field by field costs several times that, a large share of a packet of cheap rays.
+template <class S>
+[[gnu::always_inline]] inline void load_eight_rays(const Ray* rays, uint32_t base, PacketRaysSoA& soa) {
+    static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
+                  offsetof(Ray, tmin) == 6 * sizeof(float) && offsetof(Ray, tmax) == 7 * sizeof(float));
+    if constexpr (S::kLanes == 8 && !S::kScalarTriangles) {
+        const float* p = reinterpret_cast<const float*>(rays + base);
+        __m256 row[8];
+        for (int k = 0; k < 8; ++k) row[k] = _mm256_loadu_ps(p + 8 * k);
+        __m256 pair[8], quad[8];
+        for (int k = 0; k < 8; k += 2) {
+            pair[k] = _mm256_unpacklo_ps(row[k], row[k + 1]);
+            pair[k + 1] = _mm256_unpackhi_ps(row[k], row[k + 1]);
+        }
+        for (int k = 0; k < 8; k += 4) {
+            quad[k] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(1, 0, 1, 0));
+            quad[k + 1] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(3, 2, 3, 2));
+            quad[k + 2] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(1, 0, 1, 0));
+            quad[k + 3] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(3, 2, 3, 2));
+        }
+        float* field[8] = {soa.org[0] + base, soa.org[1] + base, soa.org[2] + base, soa.dir[0] + base,
+                           soa.dir[1] + base, soa.dir[2] + base, soa.tmin + base,   soa.tmax + base};
+        for (int k = 0; k < 4; ++k) {
+            _mm256_store_ps(field[k], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x20));
+            _mm256_store_ps(field[k + 4], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x31));
+        }
+    } else {
+        for (uint32_t i = base; i < base + 8; ++i) {
+            for (int axis = 0; axis < 3; ++axis) {
+                soa.org[axis][i] = rays[i].org[axis];
+                soa.dir[axis][i] = rays[i].dir[axis];
+            }
+            soa.tmin[i] = rays[i].tmin;
+            soa.tmax[i] = rays[i].tmax;
+        }
+    }
+}
+
 // The smallest and largest lane of `values`.
 template <class S>
 [[gnu::always_inline]] inline void lane_range(typename S::F lo_values, typename S::F hi_values, float& lo, float& hi) {
@@ -208,7 +248,7 @@ typedef double Double4 __attribute__((vector_size(32)));
 // finish_crossing (watertight_triangle.hpp) for the S::kLanes rays from `base` at once: the same
 // double operations lane by lane (plane_hit_distance's, the triangle's normal made once), so the same
 // distances and the same decisions, four lanes per vector. Returns the lanes of `crossing` whose
-// distance lies in the ray's [tmin, tmax]; their distances in `t`.
+// distance lies in the ray's [tmin, tmax]; their distances in `t` (other lanes may be left unset).
 template <class S>
 [[gnu::always_inline]] inline unsigned crossings_in_range(const Vec3 vertex[3], const PacketRaysSoA& rays, uint32_t base,
                                                           unsigned crossing, double* t) {
@@ -218,6 +258,7 @@ template <class S>
     const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
     unsigned in_range = 0;
     for (int j = 0; j < S::kLanes; j += 4) {
+        if (!((crossing >> j) & 15u)) continue;  // no lane of these four to decide
         const uint32_t i = base + uint32_t(j);
         const Double4 px = double(v0.x) - widened(rays.org[0] + i), py = double(v0.y) - widened(rays.org[1] + i),
                       pz = double(v0.z) - widened(rays.org[2] + i);
@@ -290,7 +331,9 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
     // directions and shears are divided L rays at a time (the same correctly rounded divisions as the
     // single-ray kernel's).
     PacketRaysSoA soa;
-    for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t whole_chunks_end = count / 8 * 8;
+    for (uint32_t base = 0; base < whole_chunks_end; base += 8) load_eight_rays<S>(rays, base, soa);
+    for (uint32_t i = whole_chunks_end; i < count; ++i) {
         for (int axis = 0; axis < 3; ++axis) {
             soa.org[axis][i] = rays[i].org[axis];
             soa.dir[axis][i] = rays[i].dir[axis];
