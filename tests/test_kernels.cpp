@@ -385,7 +385,8 @@ TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
 // one direction sign: the packet stays coherent). Packets of: every ray blocked by the near wall
 // (the packet must end early), rays blocked by the near wall next to rays that pass it and are
 // blocked by the far wall or miss it, the same with the first ray free or blocked (a blocked first
-// ray hands its place on), and segments that end before either wall. Occlusion answers must equal the
+// ray hands its place on), segments that end before either wall, and packets whose rays disagree in
+// direction signs. Occlusion answers must equal the
 // arbiter's and the single-ray kernel's; closest hits the arbiter's.
 TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
     Scene scene;
@@ -405,12 +406,12 @@ TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
 
     // 16 x 16 rays per group; `x_of(i, j)` places ray (i, j) of a group.
     std::vector<Ray> rays;
-    const auto add_group = [&](auto x_of, float tmax) {
+    const auto add_group = [&](auto x_of, float tmax, float dir_x0 = 0.02f, float dir_y0 = 0.05f) {
         for (int j = 0; j < 16; ++j)
             for (int i = 0; i < 16; ++i) {
                 Ray ray;
                 ray.org = {x_of(i, j), -3.0f + 0.37f * float(j), 0.0f};
-                ray.dir = {0.02f + 0.01f * float(i), 0.05f + 0.003f * float(j), 1.0f};
+                ray.dir = {dir_x0 + 0.01f * float(i), dir_y0 + 0.003f * float(j), 1.0f};
                 ray.tmax = tmax;
                 rays.push_back(ray);
             }
@@ -421,6 +422,10 @@ TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
     add_group([](int i, int j) { return (i + j) % 3 ? 4.0f + 0.1f * float(i) : -2.0f; }, kInfinity);    // first ray misses the far wall
     add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 1.5f);                        // segments end before both walls
     add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 5.0f);                        // only the near wall is in reach
+    // Direction y changes sign within the packets (a tile across the horizon: one packet per sign
+    // octant), and also direction x is 0 for a column (those rays cannot join a packet).
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.02f, -0.02f);
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.0f, -0.02f);
 
     std::vector<uint8_t> expected(rays.size());
     make_tracer("bvh8", scene, bvh)->occluded(rays, expected);

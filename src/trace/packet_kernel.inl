@@ -10,7 +10,11 @@
 //   - at a leaf, the rays after the first test its box (eight at a time), and those that enter test
 //     its triangles: one triangle against eight rays when the packet's rays share their shear
 //     axes, else ray by ray;
-//   - packets whose rays do not share direction signs (coherence lost) fall back to single rays.
+//   - occlusion: a ray leaves the packet once it is blocked (per-chunk masks of the active rays
+//     gate every box and triangle test; a blocked first ray hands its place to the next active
+//     one), and the packet ends once every ray is blocked;
+//   - packets whose rays do not share direction signs are traced as one packet per sign octant; rays
+//     with a zero direction component go ray by ray.
 // Every ray-box and ray-triangle decision is lane by lane the single-ray kernel's (same answers, exactly).
 // Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
 
@@ -321,9 +325,11 @@ struct PacketRay {
     typename S::F inv_dir(int axis) const { return S::set1(inv_dir_scalar[axis]); }
 };
 
+// Traces a packet whose rays share the sign of each direction component (nonzero) and returns true;
+// returns false, having traced nothing, for any other packet.
 template <class S, bool kAnyHit, bool kStats>
-void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
-                  TraversalStats* stats) {
+bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
+                           TraversalStats* stats) {
     constexpr int W = S::kLanes;
     constexpr uint32_t L = uint32_t(S::kLanes);
     const uint32_t padded_count = (count + L - 1) / L * L;
@@ -354,15 +360,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
             S::store(soa.inv_dir[axis] + base, S::div(S::set1(1.0f), S::load(soa.dir[axis] + base)));
 
     PacketFrustum frustum;
-    if (!make_frustum<S>(soa, padded_count, frustum)) {
-        for (uint32_t i = 0; i < count; ++i) {
-            Hit hit;
-            const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
-            if constexpr (kAnyHit) occluded[i] = found;
-            else hits[i] = hit;
-        }
-        return;
-    }
+    if (!make_frustum<S>(soa, padded_count, frustum)) return false;
     if constexpr (!kAnyHit)
         for (uint32_t i = 0; i < count; ++i) hits[i] = Hit{};
 
@@ -384,8 +382,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         LazyShear() {}  // left unmade: most packets never need most of them
     };
     LazyShear shears[kMaxPacket];
-    uint8_t sheared[kMaxPacket];
-    for (uint32_t i = 0; i < count; ++i) sheared[i] = 0;
+    uint8_t sheared[kMaxPacket] = {};
 
     ActivePacketRays<L> active(count);
     // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
@@ -529,7 +526,10 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                         if constexpr (kAnyHit) {
                             if (!crossed) continue;
                             entering &= ~crossed;
-                            if (active.settle(c, crossed)) return active.write_occlusion(occluded, count);
+                            if (active.settle(c, crossed)) {
+                        active.write_occlusion(occluded, count);
+                        return true;
+                    }
                         }
                     }
                     continue;
@@ -546,15 +546,58 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     bool found = false;
                     test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
                                                   kAnyHit ? unused : hits[i], found, stats);
-                    if (kAnyHit && found && active.settle(c, 1u << j)) return active.write_occlusion(occluded, count);
+                    if (kAnyHit && found && active.settle(c, 1u << j)) {
+                        active.write_occlusion(occluded, count);
+                        return true;
+                    }
                 }
             }
         }
     pop:
+        __attribute__((unused));  // only occlusion packets jump here
         if (top == 0) {
             if constexpr (kAnyHit) active.write_occlusion(occluded, count);
-            return;
+            return true;
         }
         current = stack[--top];
+    }
+}
+
+// A packet, coherent or not. Rays that disagree in direction signs (a tile across the horizon, or
+// across any plane where a direction component changes sign) are traced as one packet per sign
+// octant, so such tiles stay packets; rays a packet cannot take (a zero direction component) go
+// ray by ray.
+template <class S, bool kAnyHit, bool kStats>
+void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
+                  TraversalStats* stats) {
+    if (trace_coherent_packet<S, kAnyHit, kStats>(layout, rays, count, hits, occluded, stats)) return;
+    uint8_t octant[kMaxPacket];
+    for (uint32_t i = 0; i < count; ++i)
+        octant[i] = uint8_t((rays[i].dir.x < 0.0f) | (rays[i].dir.y < 0.0f) << 1 | (rays[i].dir.z < 0.0f) << 2);
+    Ray group[kMaxPacket];
+    uint32_t index[kMaxPacket];
+    Hit group_hits[kMaxPacket];
+    uint8_t group_occluded[kMaxPacket];
+    for (uint8_t signs = 0; signs < 8; ++signs) {
+        uint32_t size = 0;
+        for (uint32_t i = 0; i < count; ++i)
+            if (octant[i] == signs) {
+                index[size] = i;
+                group[size++] = rays[i];
+            }
+        if (size == 0) continue;
+        if (size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
+            for (uint32_t k = 0; k < size; ++k) {
+                if constexpr (kAnyHit) occluded[index[k]] = group_occluded[k];
+                else hits[index[k]] = group_hits[k];
+            }
+            continue;
+        }
+        for (uint32_t k = 0; k < size; ++k) {
+            Hit hit;
+            const bool found = traverse<S, kAnyHit, kStats>(layout, group[k], hit, stats);
+            if constexpr (kAnyHit) occluded[index[k]] = found;
+            else hits[index[k]] = hit;
+        }
     }
 }
