@@ -13,8 +13,8 @@
 //   - occlusion: a ray leaves the packet once it is blocked (per-chunk masks of the active rays
 //     gate every box and triangle test; a blocked first ray hands its place to the next active
 //     one), and the packet ends once every ray is blocked;
-//   - packets whose rays do not share direction signs are traced as one packet per sign octant; rays
-//     with a zero direction component go ray by ray.
+//   - packets whose rays do not share direction signs but fall in two sign octants are traced as one
+//     packet per octant; the rest (incoherent rays, zero direction components) go ray by ray.
 // Every ray-box and ray-triangle decision is lane by lane the single-ray kernel's (same answers, exactly).
 // Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
 
@@ -563,17 +563,23 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
     }
 }
 
-// A packet, coherent or not. Rays that disagree in direction signs (a tile across the horizon, or
-// across any plane where a direction component changes sign) are traced as one packet per sign
-// octant, so such tiles stay packets; rays a packet cannot take (a zero direction component) go
-// ray by ray.
+// A packet, coherent or not. Rays that disagree in direction signs but fall in at most two sign
+// octants (a tile across the horizon, or across any plane where a direction component changes sign)
+// are traced as one packet per octant, so such tiles stay packets; other rays (incoherent ones, or
+// with a zero direction component) go ray by ray.
 template <class S, bool kAnyHit, bool kStats>
 void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
                   TraversalStats* stats) {
     if (trace_coherent_packet<S, kAnyHit, kStats>(layout, rays, count, hits, occluded, stats)) return;
     uint8_t octant[kMaxPacket];
-    for (uint32_t i = 0; i < count; ++i)
+    unsigned octants = 0;
+    for (uint32_t i = 0; i < count; ++i) {
         octant[i] = uint8_t((rays[i].dir.x < 0.0f) | (rays[i].dir.y < 0.0f) << 1 | (rays[i].dir.z < 0.0f) << 2);
+        octants |= 1u << octant[i];
+    }
+    // Rays spread over more than two octants are incoherent (random or diffuse rays): sub-packets of
+    // them would share little traversal, so they go ray by ray.
+    const bool split = __builtin_popcount(octants) <= 2;
     Ray group[kMaxPacket];
     uint32_t index[kMaxPacket];
     Hit group_hits[kMaxPacket];
@@ -586,7 +592,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 group[size++] = rays[i];
             }
         if (size == 0) continue;
-        if (size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
+        if (split && size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
             for (uint32_t k = 0; k < size; ++k) {
                 if constexpr (kAnyHit) occluded[index[k]] = group_occluded[k];
                 else hits[index[k]] = group_hits[k];
