@@ -579,7 +579,15 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
     }
     // Rays spread over more than two octants are incoherent (random or diffuse rays): sub-packets of
     // them would share little traversal, so they go ray by ray.
-    const bool split = __builtin_popcount(octants) <= 2;
+    if (__builtin_popcount(octants) > 2) {
+        for (uint32_t i = 0; i < count; ++i) {
+            Hit hit;
+            const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
+            if constexpr (kAnyHit) occluded[i] = found;
+            else hits[i] = hit;
+        }
+        return;
+    }
     Ray group[kMaxPacket];
     uint32_t index[kMaxPacket];
     Hit group_hits[kMaxPacket];
@@ -592,7 +600,7 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 group[size++] = rays[i];
             }
         if (size == 0) continue;
-        if (split && size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
+        if (size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
             for (uint32_t k = 0; k < size; ++k) {
                 if constexpr (kAnyHit) occluded[index[k]] = group_occluded[k];
                 else hits[index[k]] = group_hits[k];
