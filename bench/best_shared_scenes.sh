@@ -22,14 +22,7 @@ runs=${RUNS:-1}
 out=${BENCH_OUT:-bench/out}
 echo "## Our best trees (cbvh+opt, spatial+opt) against Embree HIGH, shared scenes"
 echo
-for run in $(seq 1 "$runs"); do
-    [ "$runs" -gt 1 ] && echo "### Run $run of $runs" && echo
-    bash bench/each_shared_scene.sh best "${common[@]}"
-    if [ "$runs" -gt 1 ]; then
-        mkdir -p "$out/best_runs/$run"
-        cp "$out"/best_*.json "$out/best_runs/$run/"
-    fi
-done
+bash bench/each_shared_scene.sh best "${common[@]}"
 if [ "$runs" -gt 1 ]; then
     python3 bench/summarize_best.py $(seq -f "$out/best_runs/%g" 1 "$runs")
 else

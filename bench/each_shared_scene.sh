@@ -4,24 +4,33 @@
 # scene's table is measured side by side), writing $BENCH_OUT/PREFIX_STEM.json (default bench/out/)
 # and printing the tables.
 # Stems: bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated (crytek_sponza
-# rotated 45/45/45), or those in $STEMS. Used by bench/PREFIX_shared_scenes.sh, whose command line
-# it prints first.
-# Usage: bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
+# rotated 45/45/45), or those in $STEMS. RUNS=N repeats the whole loop N times (on a shared machine
+# Embree's rows vary between runs) and keeps each run's JSON in $BENCH_OUT/PREFIX_runs/RUN/. Used by
+# bench/PREFIX_shared_scenes.sh, whose command line it prints first.
+# Usage: [RUNS=N] bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
 set -euo pipefail
 prefix=$1
 shift
 scenes=../shared/scenes
 cli=./build/spacebvh
 out=${BENCH_OUT:-bench/out}
+runs=${RUNS:-1}
 mkdir -p "$out"
 echo "Command: \`bash bench/${prefix}_shared_scenes.sh\` (compare $*)"
 echo
 read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated}"
-for stem in "${stems[@]}"; do
-    if [ "$stem" = crytek_sponza_rotated ]; then
-        scene=(crytek_sponza/crytek_sponza.obj --rotate x:45,y:45,z:45)
-    else
-        scene=("$stem/$stem.obj")
-    fi
-    "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "$out/${prefix}_$stem.json" | grep -v '^# '
+for run in $(seq 1 "$runs"); do
+    [ "$runs" -gt 1 ] && echo "### Run $run of $runs" && echo
+    for stem in "${stems[@]}"; do
+        if [ "$stem" = crytek_sponza_rotated ]; then
+            scene=(crytek_sponza/crytek_sponza.obj --rotate x:45,y:45,z:45)
+        else
+            scene=("$stem/$stem.obj")
+        fi
+        "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "$out/${prefix}_$stem.json" | grep -v '^# '
+        if [ "$runs" -gt 1 ]; then
+            mkdir -p "$out/${prefix}_runs/$run"
+            cp "$out/${prefix}_$stem.json" "$out/${prefix}_runs/$run/"
+        fi
+    done
 done

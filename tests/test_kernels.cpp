@@ -388,6 +388,93 @@ TEST(Packets, TrianglesOverRaysMatchTheSingleRayKernel) {
     }
 }
 
+// Occlusion packets drop each ray once it is blocked and end once all are. A near wall of small
+// triangles covers the left half (x < 0) of a far wall; rays go from z = 0 towards +z (one shear axis,
+// one direction sign: the packet stays coherent). Packets of: every ray blocked by the near wall
+// (the packet must end early), rays blocked by the near wall next to rays that pass it and are
+// blocked by the far wall or miss it, the same with the first ray free or blocked (a blocked first
+// ray hands its place on), segments that end before either wall, and packets whose rays disagree in
+// direction signs. Occlusion answers must equal the
+// arbiter's and the single-ray kernel's; closest hits the arbiter's.
+TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
+    Scene scene;
+    scene.name = "walls";
+    const auto add_wall = [&](float x0, float x1, float z, int columns, int rows) {
+        for (int i = 0; i < columns; ++i)
+            for (int j = 0; j < rows; ++j) {
+                const float xa = x0 + (x1 - x0) * float(i) / float(columns), xb = x0 + (x1 - x0) * float(i + 1) / float(columns);
+                const float ya = -5.0f + 10.0f * float(j) / float(rows), yb = -5.0f + 10.0f * float(j + 1) / float(rows);
+                scene.triangles.push_back({{xa, ya, z}, {xb, ya, z}, {xb, yb, z}});
+                scene.triangles.push_back({{xa, ya, z}, {xb, yb, z}, {xa, yb, z}});
+            }
+    };
+    add_wall(-5.0f, 0.0f, 2.0f, 20, 40);   // near wall, left half
+    add_wall(-5.0f, 5.0f, 10.0f, 40, 40);  // far wall
+    const Bvh bvh = spacebvh::build(scene, config_for("spatial"));
+
+    // 16 x 16 rays per group; `x_of(i, j)` places ray (i, j) of a group.
+    std::vector<Ray> rays;
+    const auto add_group = [&](auto x_of, float tmax, float dir_x0 = 0.02f, float dir_y0 = 0.05f) {
+        for (int j = 0; j < 16; ++j)
+            for (int i = 0; i < 16; ++i) {
+                Ray ray;
+                ray.org = {x_of(i, j), -3.0f + 0.37f * float(j), 0.0f};
+                ray.dir = {dir_x0 + 0.01f * float(i), dir_y0 + 0.003f * float(j), 1.0f};
+                ray.tmax = tmax;
+                rays.push_back(ray);
+            }
+    };
+    add_group([](int i, int) { return -4.5f + 0.2f * float(i); }, kInfinity);                   // all blocked by the near wall
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity);  // alternate near / far
+    add_group([](int i, int j) { return (i + j) % 3 ? -3.0f : 1.0f + 0.3f * float(i); }, kInfinity);    // first ray blocked late
+    add_group([](int i, int j) { return (i + j) % 3 ? 4.0f + 0.1f * float(i) : -2.0f; }, kInfinity);    // first ray misses the far wall
+    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 1.5f);                        // segments end before both walls
+    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 5.0f);                        // only the near wall is in reach
+    // Direction y changes sign within the packets (a tile across the horizon: one packet per sign
+    // octant), and also direction x is 0 for a column (those rays cannot join a packet).
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.02f, -0.02f);
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.0f, -0.02f);
+
+    std::vector<uint8_t> expected(rays.size());
+    make_tracer("bvh8", scene, bvh)->occluded(rays, expected);
+    size_t blocked = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ASSERT_EQ(bool(expected[i]), arbiter_occlusion(scene, rays[i]).is_hit()) << i;
+        blocked += expected[i];
+    }
+    // The groups really mix blocked and free rays: all 256 of the first blocked, none of the fifth.
+    EXPECT_EQ(std::count(expected.begin(), expected.begin() + 256, 1), 256);
+    EXPECT_EQ(std::count(expected.begin() + 1024, expected.begin() + 1280, 1), 0);
+    EXPECT_GT(blocked, rays.size() / 3);
+    EXPECT_LT(blocked, rays.size() - rays.size() / 4);
+
+    std::vector<HitRecord> expected_closest(rays.size());
+    for (size_t i = 0; i < rays.size(); ++i) expected_closest[i] = arbiter_closest_hit(scene, rays[i]);
+    for (uint32_t size : {1u, 8u, 13u, 64u, 256u}) {
+        for (NodeTest test : supported_node_tests(8)) {
+            if (test == NodeTest::sse) continue;
+            SCOPED_TRACE(std::to_string(size) + " rays per packet, " + to_string(test));
+            const Tracer tracer(scene, bvh, TracerConfig{Kernel::packet8, test, WideCollapse::sah_optimal, size});
+            const auto occlusion = occlusion_records(tracer, rays);
+            const auto closest = closest_records(tracer, rays);
+            size_t wrong = 0, wrong_closest = 0;
+            for (size_t i = 0; i < rays.size(); ++i) {
+                wrong += occlusion[i].is_hit() != bool(expected[i]);
+                wrong_closest += !hits_agree(closest[i], expected_closest[i], rays[i], scene.diagonal());
+            }
+            EXPECT_EQ(wrong, 0u);
+            EXPECT_EQ(wrong_closest, 0u);
+            // A fully blocked packet ends once its rays are blocked: a leaf or two per ray, not the
+            // whole wall the frustum spans.
+            std::vector<uint8_t> occluded(256);
+            TraversalStats stats;
+            tracer.occluded(std::span(rays.data(), 256), occluded, &stats);
+            EXPECT_EQ(std::count(occluded.begin(), occluded.end(), 1), 256);
+            EXPECT_LE(stats.triangles_tested, 256u * 8u);
+        }
+    }
+}
+
 // The single-ray kernels order three or more entered children by sorting integer visit keys
 // (trace/visit_order.hpp): the order must be visits_after's, nearest first and, at equal distances,
 // the later slot first (-0 just before +0), for every count the 4- and 8-wide nodes produce.

@@ -10,7 +10,11 @@
 //   - at a leaf, the rays after the first test its box (eight at a time), and those that enter test
 //     its triangles: one triangle against eight rays when the packet's rays share their shear
 //     axes, else ray by ray;
-//   - packets whose rays do not share direction signs (coherence lost) fall back to single rays.
+//   - occlusion: a ray leaves the packet once it is blocked (per-chunk masks of the active rays
+//     gate every box and triangle test; a blocked first ray hands its place to the next active
+//     one), and the packet ends once every ray is blocked;
+//   - packets whose rays do not share direction signs but fall in two sign octants are traced as one
+//     packet per octant; the rest (incoherent rays, zero direction components) go ray by ray.
 // Every ray-box and ray-triangle decision is lane by lane the single-ray kernel's (same answers, exactly).
 // Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
 
@@ -21,32 +25,130 @@ struct PacketFrustum {
     float tmin_lo, tmax_hi;
 };
 
-// False when the rays do not all share the sign of each direction component (or one is zero): the
-// entry and exit planes then differ between rays and the packet goes ray by ray. `inv_dir[axis][i]`
-// holds 1 / rays[i].dir[axis].
-inline bool make_frustum(const Ray* rays, const float (*inv_dir)[kMaxPacket], uint32_t count, PacketFrustum& frustum) {
-    for (int axis = 0; axis < 3; ++axis) {
-        const bool negative = rays[0].dir[axis] < 0.0f;
-        frustum.org_lo[axis] = frustum.org_hi[axis] = rays[0].org[axis];
-        frustum.inv_lo[axis] = frustum.inv_hi[axis] = inv_dir[axis][0];
-        for (uint32_t i = 0; i < count; ++i) {
-            const float d = rays[i].dir[axis];
-            if (d == 0.0f || (d < 0.0f) != negative) return false;
-            const float inv = inv_dir[axis][i];
-            frustum.org_lo[axis] = std::min(frustum.org_lo[axis], rays[i].org[axis]);
-            frustum.org_hi[axis] = std::max(frustum.org_hi[axis], rays[i].org[axis]);
-            frustum.inv_lo[axis] = std::min(frustum.inv_lo[axis], inv);
-            frustum.inv_hi[axis] = std::max(frustum.inv_hi[axis], inv);
+// The rays of a packet in structure-of-arrays form, so the tests below run over S::kLanes rays at
+// once. Entries from `count` up to the next multiple of the lane count copy the first ray's origin
+// and direction (so bounds over whole chunks are the packet's own) with tmin = +inf, tmax = -inf:
+// they enter nothing.
+struct PacketRaysSoA {
+    alignas(64) float org[3][kMaxPacket];
+    alignas(64) float dir[3][kMaxPacket];
+    alignas(64) float inv_dir[3][kMaxPacket];
+    alignas(64) float tmin[kMaxPacket];
+    alignas(64) float tmax[kMaxPacket];
+    alignas(64) float shear_x[kMaxPacket];  // WatertightRay's, for the triangle test over rays
+    alignas(64) float shear_y[kMaxPacket];
+};
+
+// Rays base .. base + 7 into the SoA arrays. A Ray is eight floats (origin, direction, tmin, tmax),
+// so with 8-lane AVX the eight rays are an 8 x 8 transpose in registers (24 shuffles); the copy
+// field by field costs several times that, a large share of a packet of cheap rays.
+template <class S>
+[[gnu::always_inline]] inline void load_eight_rays(const Ray* rays, uint32_t base, PacketRaysSoA& soa) {
+    static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
+                  offsetof(Ray, tmin) == 6 * sizeof(float) && offsetof(Ray, tmax) == 7 * sizeof(float));
+    if constexpr (S::kLanes == 8 && !S::kScalarTriangles) {
+        const float* p = reinterpret_cast<const float*>(rays + base);
+        __m256 row[8];
+        for (int k = 0; k < 8; ++k) row[k] = _mm256_loadu_ps(p + 8 * k);
+        __m256 pair[8], quad[8];
+        for (int k = 0; k < 8; k += 2) {
+            pair[k] = _mm256_unpacklo_ps(row[k], row[k + 1]);
+            pair[k + 1] = _mm256_unpackhi_ps(row[k], row[k + 1]);
         }
-        if (!std::isfinite(frustum.inv_lo[axis]) || !std::isfinite(frustum.inv_hi[axis])) return false;
-        frustum.entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
-        frustum.exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
+        for (int k = 0; k < 8; k += 4) {
+            quad[k] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(1, 0, 1, 0));
+            quad[k + 1] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(3, 2, 3, 2));
+            quad[k + 2] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(1, 0, 1, 0));
+            quad[k + 3] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(3, 2, 3, 2));
+        }
+        float* field[8] = {soa.org[0] + base, soa.org[1] + base, soa.org[2] + base, soa.dir[0] + base,
+                           soa.dir[1] + base, soa.dir[2] + base, soa.tmin + base,   soa.tmax + base};
+        for (int k = 0; k < 4; ++k) {
+            _mm256_store_ps(field[k], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x20));
+            _mm256_store_ps(field[k + 4], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x31));
+        }
+    } else {
+        for (uint32_t i = base; i < base + 8; ++i) {
+            for (int axis = 0; axis < 3; ++axis) {
+                soa.org[axis][i] = rays[i].org[axis];
+                soa.dir[axis][i] = rays[i].dir[axis];
+            }
+            soa.tmin[i] = rays[i].tmin;
+            soa.tmax[i] = rays[i].tmax;
+        }
     }
-    frustum.tmin_lo = rays[0].tmin;
-    frustum.tmax_hi = rays[0].tmax;
-    for (uint32_t i = 0; i < count; ++i) {
-        frustum.tmin_lo = std::min(frustum.tmin_lo, rays[i].tmin);
-        frustum.tmax_hi = std::max(frustum.tmax_hi, rays[i].tmax);
+}
+
+// The smallest and largest lane of `values`.
+template <class S>
+[[gnu::always_inline]] inline void lane_range(typename S::F lo_values, typename S::F hi_values, float& lo, float& hi) {
+    alignas(64) float lo_lanes[S::kLanes], hi_lanes[S::kLanes];
+    S::store(lo_lanes, lo_values);
+    S::store(hi_lanes, hi_values);
+    lo = lo_lanes[0];
+    hi = hi_lanes[0];
+    for (int j = 1; j < S::kLanes; ++j) {
+        lo = std::min(lo, lo_lanes[j]);
+        hi = std::max(hi, hi_lanes[j]);
+    }
+}
+
+// False when the rays do not all share the sign of each direction component (or one is zero, or an
+// inverse direction is not finite): the entry and exit planes then differ between rays and the packet
+// goes ray by ray. Bounds are taken over whole chunks of S::kLanes rays (the padding copies ray 0).
+template <class S>
+inline bool make_frustum(const PacketRaysSoA& rays, uint32_t padded_count, PacketFrustum& frustum) {
+    using F = typename S::F;
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    constexpr unsigned kAllLanes = (1u << L) - 1;
+    const F zero = S::set1(0.0f);
+    for (int axis = 0; axis < 3; ++axis) {
+        F org_lo = S::load(rays.org[axis]), org_hi = org_lo, inv_lo = S::load(rays.inv_dir[axis]), inv_hi = inv_lo;
+        unsigned negative = kAllLanes, positive = kAllLanes;
+        for (uint32_t base = 0; base < padded_count; base += L) {
+            const F org = S::load(rays.org[axis] + base), inv = S::load(rays.inv_dir[axis] + base);
+            const F dir = S::load(rays.dir[axis] + base);
+            negative &= S::less_mask(dir, zero);
+            positive &= S::less_mask(zero, dir);
+            org_lo = S::min(org_lo, org);
+            org_hi = S::max(org_hi, org);
+            inv_lo = S::min(inv_lo, inv);
+            inv_hi = S::max(inv_hi, inv);
+        }
+        if (negative != kAllLanes && positive != kAllLanes) return false;
+        lane_range<S>(org_lo, org_hi, frustum.org_lo[axis], frustum.org_hi[axis]);
+        lane_range<S>(inv_lo, inv_hi, frustum.inv_lo[axis], frustum.inv_hi[axis]);
+        if (!std::isfinite(frustum.inv_lo[axis]) || !std::isfinite(frustum.inv_hi[axis])) return false;
+        const bool is_negative = negative == kAllLanes;
+        frustum.entry_plane[axis] = 2 * axis + (is_negative ? 1 : 0);
+        frustum.exit_plane[axis] = 2 * axis + (is_negative ? 0 : 1);
+    }
+    F tmin_lo = S::load(rays.tmin), tmax_hi = S::load(rays.tmax);
+    for (uint32_t base = 0; base < padded_count; base += L) {
+        tmin_lo = S::min(tmin_lo, S::load(rays.tmin + base));
+        tmax_hi = S::max(tmax_hi, S::load(rays.tmax + base));
+    }
+    float unused;
+    lane_range<S>(tmin_lo, tmin_lo, frustum.tmin_lo, unused);
+    lane_range<S>(tmax_hi, tmax_hi, unused, frustum.tmax_hi);
+    return true;
+}
+
+// Whether every ray's largest direction component is on axis `kz` (dominant_axis: ties to the lower
+// axis), so all share the watertight test's shear axes.
+template <class S>
+inline bool all_dominant_on(const PacketRaysSoA& rays, uint32_t padded_count, int kz) {
+    using F = typename S::F;
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    constexpr unsigned kAllLanes = (1u << L) - 1;
+    for (uint32_t base = 0; base < padded_count; base += L) {
+        const F x = S::abs(S::load(rays.dir[0] + base)), y = S::abs(S::load(rays.dir[1] + base)),
+                z = S::abs(S::load(rays.dir[2] + base));
+        bool same;
+        if (kz == 0) same = (S::less_mask(x, y) | S::less_mask(x, z)) == 0;           // x >= y and x >= z
+        else if (kz == 1) same = S::less_mask(x, y) == kAllLanes && S::less_mask(y, z) == 0;  // y > x, y >= z
+        else same = (S::less_mask(x, z) & S::less_mask(y, z)) == kAllLanes;          // z > x and z > y
+        if (!same) return false;
     }
     return true;
 }
@@ -78,18 +180,6 @@ template <class S>
     const F upper_widened = S::max(S::mul(upper, grow), S::mul(upper, shrink));
     return S::hit_mask(lower_widened, upper_widened);
 }
-
-// The packet's rays in structure-of-arrays form, so the tests below run over S::kLanes rays at once.
-// Entries from `count` up to the next multiple of the lane count hold a ray that enters nothing
-// (tmin = +inf, tmax = -inf).
-struct PacketRaysSoA {
-    alignas(64) float org[3][kMaxPacket];
-    alignas(64) float inv_dir[3][kMaxPacket];
-    alignas(64) float tmin[kMaxPacket];
-    alignas(64) float tmax[kMaxPacket];
-    alignas(64) float shear_x[kMaxPacket];  // WatertightRay's, for the triangle test over rays
-    alignas(64) float shear_y[kMaxPacket];
-};
 
 // The edge functions of one triangle (a lane of a TrianglePack) for S::kLanes rays that share the
 // shear's axes kx, ky, kz: pack_edges with the roles of rays and triangles swapped, lane by lane the
@@ -150,24 +240,78 @@ template <class S>
     return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
 }
 
-// rays_entering_child for rays base .. base + S::kLanes - 1, keeping only those after the packet's
-// first active ray `first` (rays before it are known to miss; the first is handled on its own).
-// Settled occlusion rays have tmax = -inf: they enter nothing. Counts one box test per unsettled
-// ray considered.
-template <class S, bool kAnyHit, bool kStats>
-[[gnu::always_inline]] inline unsigned later_rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot,
-                                                                 const PacketRaysSoA& rays, uint32_t base, uint32_t first,
-                                                                 uint32_t count, const uint8_t* occluded,
-                                                                 const PacketFrustum& frustum, TraversalStats* stats,
-                                                                 float* entry = nullptr) {
-    constexpr uint32_t L = uint32_t(S::kLanes);
-    unsigned entering = rays_entering_child<S>(node, slot, rays, base, frustum, entry);
-    if (base <= first) entering &= ~((2u << (first - base)) - 1);
-    if constexpr (kStats)
-        for (uint32_t i = std::max(base, first + 1); i < std::min(base + L, count); ++i)
-            stats->nodes_visited += !(kAnyHit && occluded[i]);
-    return entering;
+// Four doubles (GCC and Clang vector extensions: AVX registers where the target has them).
+typedef double Double4 __attribute__((vector_size(32)));
+[[gnu::always_inline]] inline Double4 widened(const float* p) {
+    typedef float Float4 __attribute__((vector_size(16)));
+    Float4 f;
+    __builtin_memcpy(&f, p, sizeof(f));
+    return __builtin_convertvector(f, Double4);
 }
+
+// finish_crossing (watertight_triangle.hpp) for the S::kLanes rays from `base` at once: the same
+// double operations lane by lane (plane_hit_distance's, the triangle's normal made once), so the same
+// distances and the same decisions, four lanes per vector. Returns the lanes of `crossing` whose
+// distance lies in the ray's [tmin, tmax]; their distances in `t` (other lanes may be left unset).
+template <class S>
+[[gnu::always_inline]] inline unsigned crossings_in_range(const Vec3 vertex[3], const PacketRaysSoA& rays, uint32_t base,
+                                                          unsigned crossing, double* t) {
+    const Vec3 &v0 = vertex[0], &v1 = vertex[1], &v2 = vertex[2];
+    const double e1x = double(v1.x) - v0.x, e1y = double(v1.y) - v0.y, e1z = double(v1.z) - v0.z;
+    const double e2x = double(v2.x) - v0.x, e2y = double(v2.y) - v0.y, e2z = double(v2.z) - v0.z;
+    const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    unsigned in_range = 0;
+    for (int j = 0; j < S::kLanes; j += 4) {
+        if (!((crossing >> j) & 15u)) continue;  // no lane of these four to decide
+        const uint32_t i = base + uint32_t(j);
+        const Double4 px = double(v0.x) - widened(rays.org[0] + i), py = double(v0.y) - widened(rays.org[1] + i),
+                      pz = double(v0.z) - widened(rays.org[2] + i);
+        const Double4 distance = (nx * px + ny * py + nz * pz) /
+                                 (nx * widened(rays.dir[0] + i) + ny * widened(rays.dir[1] + i) + nz * widened(rays.dir[2] + i));
+        const auto inside = (distance >= widened(rays.tmin + i)) & (distance <= widened(rays.tmax + i));
+        __builtin_memcpy(t + j, &distance, sizeof(distance));
+        for (int k = 0; k < 4; ++k) in_range |= unsigned(inside[k] != 0) << (j + k);
+    }
+    return in_range & crossing;
+}
+
+// The rays of a packet still looking for an answer, L per chunk (bit j of chunk c: ray c * L + j):
+// an occlusion ray leaves once it is blocked, and the packet ends once none is left; closest-hit
+// rays stay to the end. Every box and triangle test is masked with these bits, so a settled ray
+// enters nothing again; the occlusion answers are written from them once, at the end.
+inline constexpr uint32_t kNoRay = ~0u;
+template <uint32_t L>
+struct ActivePacketRays {
+    unsigned bits[kMaxPacket / L];
+    uint32_t chunks, unsettled;
+
+    explicit ActivePacketRays(uint32_t count) : chunks((count + L - 1) / L), unsettled(count) {
+        for (uint32_t c = 0; c < chunks; ++c) bits[c] = (1u << L) - 1;
+        if (count % L) bits[chunks - 1] = (1u << (count % L)) - 1;
+    }
+    // The active rays of chunk c after ray `first`.
+    unsigned after(uint32_t c, uint32_t first) const {
+        const uint32_t base = c * L;
+        return base > first ? bits[c] : bits[c] & ~((2u << (first - base)) - 1);
+    }
+    // The first active ray at or after `first`, or kNoRay.
+    uint32_t first_from(uint32_t first) const {
+        uint32_t c = first / L;
+        unsigned rest = bits[c] & ~((1u << (first % L)) - 1);
+        while (!rest && ++c < chunks) rest = bits[c];
+        return rest ? c * L + uint32_t(__builtin_ctz(rest)) : kNoRay;
+    }
+    // Settles the rays of chunk c in `blocked` (occluded); true when no ray of the packet is left.
+    bool settle(uint32_t c, unsigned blocked) {
+        bits[c] &= ~blocked;
+        unsettled -= uint32_t(__builtin_popcount(blocked));
+        return unsettled == 0;
+    }
+    // The occlusion answers: the settled rays are the blocked ones.
+    void write_occlusion(uint8_t* occluded, uint32_t count) const {
+        for (uint32_t i = 0; i < count; ++i) occluded[i] = !((bits[i / L] >> (i % L)) & 1u);
+    }
+};
 
 // One ray of a packet as enter_children sees it: its origin and inverse direction broadcast on demand
 // (cheap loads) instead of kept in registers per ray.
@@ -181,64 +325,56 @@ struct PacketRay {
     typename S::F inv_dir(int axis) const { return S::set1(inv_dir_scalar[axis]); }
 };
 
+// Traces a packet whose rays share the sign of each direction component (nonzero) and returns true;
+// returns false, having traced nothing, for any other packet.
 template <class S, bool kAnyHit, bool kStats>
-void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
-                  TraversalStats* stats) {
+bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
+                           TraversalStats* stats) {
     constexpr int W = S::kLanes;
     constexpr uint32_t L = uint32_t(S::kLanes);
-    // The rays in structure-of-arrays form; entries from `count` up to the next multiple of L hold a
-    // ray that enters nothing (tmin = +inf, tmax = -inf). A ray whose occlusion is settled gets
-    // tmax = -inf: it enters no box again. Inverse directions and shears are divided L rays at a time
-    // (the same correctly rounded divisions as the single-ray kernel's).
+    const uint32_t padded_count = (count + L - 1) / L * L;
+    // The rays in structure-of-arrays form (PacketRaysSoA: the padding enters nothing). Inverse
+    // directions and shears are divided L rays at a time (the same correctly rounded divisions as the
+    // single-ray kernel's).
     PacketRaysSoA soa;
-    alignas(64) float dir[3][kMaxPacket];
-    for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t whole_chunks_end = count / 8 * 8;
+    for (uint32_t base = 0; base < whole_chunks_end; base += 8) load_eight_rays<S>(rays, base, soa);
+    for (uint32_t i = whole_chunks_end; i < count; ++i) {
         for (int axis = 0; axis < 3; ++axis) {
             soa.org[axis][i] = rays[i].org[axis];
-            dir[axis][i] = rays[i].dir[axis];
+            soa.dir[axis][i] = rays[i].dir[axis];
         }
         soa.tmin[i] = rays[i].tmin;
         soa.tmax[i] = rays[i].tmax;
     }
-    for (uint32_t i = count; i % L != 0; ++i) {
+    for (uint32_t i = count; i < padded_count; ++i) {
         for (int axis = 0; axis < 3; ++axis) {
-            soa.org[axis][i] = 0.0f;
-            dir[axis][i] = 1.0f;
+            soa.org[axis][i] = rays[0].org[axis];
+            soa.dir[axis][i] = rays[0].dir[axis];
         }
         soa.tmin[i] = kInfinity;
         soa.tmax[i] = -kInfinity;
     }
-    for (uint32_t base = 0; base < count; base += L)
+    for (uint32_t base = 0; base < padded_count; base += L)
         for (int axis = 0; axis < 3; ++axis)
-            S::store(soa.inv_dir[axis] + base, S::div(S::set1(1.0f), S::load(dir[axis] + base)));
+            S::store(soa.inv_dir[axis] + base, S::div(S::set1(1.0f), S::load(soa.dir[axis] + base)));
 
     PacketFrustum frustum;
-    if (!make_frustum(rays, soa.inv_dir, count, frustum)) {
-        for (uint32_t i = 0; i < count; ++i) {
-            Hit hit;
-            const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
-            if constexpr (kAnyHit) occluded[i] = found;
-            else hits[i] = hit;
-        }
-        return;
-    }
-    for (uint32_t i = 0; i < count; ++i) {
-        if constexpr (kAnyHit) occluded[i] = 0;
-        else hits[i] = Hit{};
-    }
+    if (!make_frustum<S>(soa, padded_count, frustum)) return false;
+    if constexpr (!kAnyHit)
+        for (uint32_t i = 0; i < count; ++i) hits[i] = Hit{};
 
     // The shear axes of the watertight triangle test (WatertightRay): when every ray of the packet
     // shears along the same axes, leaves test triangles over rays with the shears kept in soa; the
     // WatertightRay of a ray that tests a leaf on its own is made when it first does.
     const WatertightRay first_shear(rays[0]);
     const int kx = first_shear.kx, ky = first_shear.ky, kz = first_shear.kz;
-    bool same_shear_axes = true;
-    for (uint32_t i = 1; i < count; ++i) same_shear_axes &= dominant_axis(rays[i].dir) == kz;
+    const bool same_shear_axes = all_dominant_on<S>(soa, padded_count, kz);
     if (same_shear_axes) {
-        for (uint32_t base = 0; base < count; base += L) {
-            const typename S::F dir_z = S::load(dir[kz] + base);
-            S::store(soa.shear_x + base, S::div(S::load(dir[kx] + base), dir_z));
-            S::store(soa.shear_y + base, S::div(S::load(dir[ky] + base), dir_z));
+        for (uint32_t base = 0; base < padded_count; base += L) {
+            const typename S::F dir_z = S::load(soa.dir[kz] + base);
+            S::store(soa.shear_x + base, S::div(S::load(soa.dir[kx] + base), dir_z));
+            S::store(soa.shear_y + base, S::div(S::load(soa.dir[ky] + base), dir_z));
         }
     }
     union LazyShear {
@@ -246,10 +382,9 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         LazyShear() {}  // left unmade: most packets never need most of them
     };
     LazyShear shears[kMaxPacket];
-    uint8_t sheared[kMaxPacket];
-    for (uint32_t i = 0; i < count; ++i) sheared[i] = 0;
-    uint32_t unsettled = count;
+    uint8_t sheared[kMaxPacket] = {};
 
+    ActivePacketRays<L> active(count);
     // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
     struct Entry {
         uint32_t child, count, first, parent, slot;
@@ -261,6 +396,12 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
     while (true) {
         if (current.count == 0) {
             const WideNode<W>& node = layout.nodes[current.child];
+            if constexpr (kAnyHit) {
+                // A blocked first ray enters nothing: the node's first active ray at or after it takes
+                // its place (rays before it miss the node or are settled).
+                current.first = active.first_from(current.first);
+                if (current.first == kNoRay) goto pop;
+            }
             uint32_t valid_children = 0;
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) valid_children += node.used(slot);
@@ -286,17 +427,19 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 }
             }
             // It missed some children: the packet's frustum culls most of them; each of the rest looks
-            // for its first ray among the later ones, S::kLanes rays at a time.
+            // for its first ray among the later active ones, S::kLanes rays at a time.
             if (remaining) remaining &= frustum_mask<S>(node, frustum);
             for (; remaining; remaining &= remaining - 1) {
                 const uint32_t child_slot = uint32_t(__builtin_ctz(remaining));
-                for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
+                for (uint32_t c = (current.first + 1) / L; c < active.chunks; ++c) {
+                    const unsigned candidates = active.after(c, current.first);
+                    if (!candidates) continue;
+                    if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
                     alignas(64) float entry[L];
-                    const unsigned entering = later_rays_entering_child<S, kAnyHit, kStats>(
-                        node, child_slot, soa, base, current.first, count, occluded, frustum, stats, entry);
+                    const unsigned entering = candidates & rays_entering_child<S>(node, child_slot, soa, c * L, frustum, entry);
                     if (!entering) continue;
                     const uint32_t lane = uint32_t(__builtin_ctz(entering));
-                    first_ray[child_slot] = base + lane;
+                    first_ray[child_slot] = c * L + lane;
                     first_entry[child_slot] = entry[lane];
                     assigned |= 1u << child_slot;
                     break;
@@ -323,22 +466,27 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 continue;
             }
         } else {
-            // Only the first active ray is known to enter the leaf: the others test its box first
-            // (six planes against a pack test of four triangles), S::kLanes rays at a time.
+            // Only the first ray is known to enter the leaf (unless it has been blocked since): the
+            // later active rays test its box first (six planes against a pack test of four
+            // triangles), S::kLanes rays at a time. The box test only reads each ray's own tmax,
+            // which only its own triangle tests change, so all of them can be found before any is
+            // tested.
             const WideNode<W>& parent = layout.nodes[current.parent];
-            // The rays that enter the leaf: the box test only reads each ray's own tmax, which only
-            // its own triangle tests change, so all of them can be found before any is tested.
+            const uint32_t first_chunk = current.first / L;
             unsigned entering_chunk[kMaxPacket / L];  // bit j of chunk c: ray c * L + j enters the leaf
-            for (uint32_t c = 0; c * L < count; ++c) entering_chunk[c] = 0;
-            if (!(kAnyHit && occluded[current.first])) entering_chunk[current.first / L] = 1u << (current.first % L);
-            for (uint32_t base = (current.first + 1) / L * L; base < count; base += L) {
-                entering_chunk[base / L] |= later_rays_entering_child<S, kAnyHit, kStats>(
-                    parent, current.slot, soa, base, current.first, count, occluded, frustum, stats);
+            for (uint32_t c = first_chunk; c < active.chunks; ++c) {
+                const unsigned candidates = active.after(c, current.first);
+                entering_chunk[c] = 0;
+                if (!candidates) continue;
+                if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
+                entering_chunk[c] = candidates & rays_entering_child<S>(parent, current.slot, soa, c * L, frustum);
             }
+            entering_chunk[first_chunk] |= active.bits[first_chunk] & (1u << (current.first % L));
             // Each ray meets the leaf's triangles in lane order with its own tmax, whichever way they
             // are tested, so both ways give the same answers.
-            for (uint32_t base = current.first / L * L; base < count; base += L) {
-                unsigned entering = entering_chunk[base / L];
+            for (uint32_t c = first_chunk; c < active.chunks; ++c) {
+                unsigned entering = entering_chunk[c];
+                const uint32_t base = c * L;
                 if (!S::kScalarTriangles && same_shear_axes && 2 * uint32_t(__builtin_popcount(entering)) >= L) {
                     // Most of these rays enter: one triangle against L rays at a time.
                     for (uint32_t lane_index = 0; lane_index < current.count && entering; ++lane_index) {
@@ -350,34 +498,44 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                         alignas(64) float u[L], v[L], w[L];
                         unsigned outside, inside;
                         edges_over_rays<S>(pack, lane, soa, base, kx, ky, kz, u, v, w, outside, inside);
-                        unsigned candidates = entering & ~outside;
+                        const unsigned candidates = entering & ~outside;
                         if (!candidates) continue;
                         Vec3 vertex[3];
                         pack_triangle(pack, lane, vertex);
-                        for (; candidates; candidates &= candidates - 1) {
-                            const uint32_t j = uint32_t(__builtin_ctz(candidates));
-                            const uint32_t i = base + j;
+                        alignas(64) double t[L];
+                        unsigned crossed = candidates & inside ? crossings_in_range<S>(vertex, soa, base, candidates & inside, t) : 0;
+                        if constexpr (!kAnyHit)
+                            for (unsigned bits = crossed; bits; bits &= bits - 1) {
+                                const uint32_t j = uint32_t(__builtin_ctz(bits)), i = base + j;
+                                const float det = u[j] + v[j] + w[j];
+                                soa.tmax[i] = float(t[j]);
+                                hits[i] = {float(t[j]), pack.primitive[lane], v[j] / det, w[j] / det};
+                            }
+                        // Near an edge or a vertex: the exact test, ray by ray.
+                        for (unsigned near_edge = candidates & ~inside; near_edge; near_edge &= near_edge - 1) {
+                            const uint32_t j = uint32_t(__builtin_ctz(near_edge)), i = base + j;
                             TriangleHit candidate;
-                            const bool crossed =
-                                (inside >> j) & 1
-                                    ? finish_crossing(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate)
-                                    : decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate);
-                            if (!crossed) continue;
-                            if constexpr (kAnyHit) {
-                                occluded[i] = 1;
-                                soa.tmax[i] = -kInfinity;
-                                entering &= ~(1u << j);
-                                if (--unsettled == 0) return;
-                            } else {
+                            if (!decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate))
+                                continue;
+                            crossed |= 1u << j;
+                            if constexpr (!kAnyHit) {
                                 soa.tmax[i] = candidate.t;
                                 hits[i] = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
                             }
+                        }
+                        if constexpr (kAnyHit) {
+                            if (!crossed) continue;
+                            entering &= ~crossed;
+                            if (active.settle(c, crossed)) {
+                        active.write_occlusion(occluded, count);
+                        return true;
+                    }
                         }
                     }
                     continue;
                 }
                 for (; entering; entering &= entering - 1) {
-                    const uint32_t i = base + uint32_t(__builtin_ctz(entering));
+                    const uint32_t j = uint32_t(__builtin_ctz(entering)), i = base + j;
                     if (!sheared[i]) {
                         new (&shears[i].shear) WatertightRay(rays[i]);
                         sheared[i] = 1;
@@ -388,15 +546,72 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                     bool found = false;
                     test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
                                                   kAnyHit ? unused : hits[i], found, stats);
-                    if (kAnyHit && found) {
-                        occluded[i] = 1;
-                        soa.tmax[i] = -kInfinity;
-                        if (--unsettled == 0) return;
+                    if (kAnyHit && found && active.settle(c, 1u << j)) {
+                        active.write_occlusion(occluded, count);
+                        return true;
                     }
                 }
             }
         }
-        if (top == 0) return;
+    pop:
+        __attribute__((unused));  // only occlusion packets jump here
+        if (top == 0) {
+            if constexpr (kAnyHit) active.write_occlusion(occluded, count);
+            return true;
+        }
         current = stack[--top];
+    }
+}
+
+// A packet, coherent or not. Rays that disagree in direction signs but fall in at most two sign
+// octants (a tile across the horizon, or across any plane where a direction component changes sign)
+// are traced as one packet per octant, so such tiles stay packets; other rays (incoherent ones, or
+// with a zero direction component) go ray by ray.
+template <class S, bool kAnyHit, bool kStats>
+void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
+                  TraversalStats* stats) {
+    if (trace_coherent_packet<S, kAnyHit, kStats>(layout, rays, count, hits, occluded, stats)) return;
+    uint8_t octant[kMaxPacket];
+    unsigned octants = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        octant[i] = uint8_t((rays[i].dir.x < 0.0f) | (rays[i].dir.y < 0.0f) << 1 | (rays[i].dir.z < 0.0f) << 2);
+        octants |= 1u << octant[i];
+    }
+    // Rays spread over more than two octants are incoherent (random or diffuse rays): sub-packets of
+    // them would share little traversal, so they go ray by ray.
+    if (__builtin_popcount(octants) > 2) {
+        for (uint32_t i = 0; i < count; ++i) {
+            Hit hit;
+            const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
+            if constexpr (kAnyHit) occluded[i] = found;
+            else hits[i] = hit;
+        }
+        return;
+    }
+    Ray group[kMaxPacket];
+    uint32_t index[kMaxPacket];
+    Hit group_hits[kMaxPacket];
+    uint8_t group_occluded[kMaxPacket];
+    for (uint8_t signs = 0; signs < 8; ++signs) {
+        uint32_t size = 0;
+        for (uint32_t i = 0; i < count; ++i)
+            if (octant[i] == signs) {
+                index[size] = i;
+                group[size++] = rays[i];
+            }
+        if (size == 0) continue;
+        if (size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
+            for (uint32_t k = 0; k < size; ++k) {
+                if constexpr (kAnyHit) occluded[index[k]] = group_occluded[k];
+                else hits[index[k]] = group_hits[k];
+            }
+            continue;
+        }
+        for (uint32_t k = 0; k < size; ++k) {
+            Hit hit;
+            const bool found = traverse<S, kAnyHit, kStats>(layout, group[k], hit, stats);
+            if constexpr (kAnyHit) occluded[index[k]] = found;
+            else hits[index[k]] = hit;
+        }
     }
 }
