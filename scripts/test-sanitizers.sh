@@ -11,8 +11,9 @@
 #   installed_package_example     builds examples/minimal against an installed package with plain
 #                                 flags, which cannot link the sanitizer runtime.
 # And, unless SANITIZE_ALL=1, the heaviest tests (each 20 s to 2 min of CPU under the sanitizers on
-# two cores: repeated full builds of the built-in interior and of Embree HIGH trees, the GMP rational
-# reference over every built-in scene, hundreds of thousands of packet and float64 rays). Their code
+# two cores: repeated full builds of the built-in interior and of Embree HIGH trees, every builder on
+# the three largest built-in scenes, the GMP rational reference over every built-in scene, hundreds of
+# thousands of packet, float64 and leaf-filter rays, the sampled reinsertion's repricing). Their code
 # paths run here in the other tests, on smaller inputs; CI's time allows the rest only.
 # Usage: [SANITIZE_ALL=1] bash scripts/test-sanitizers.sh [extra ctest arguments]   CI runs it from .ci/run.
 set -euo pipefail
@@ -28,7 +29,9 @@ heavy=(ExactSpatialSweep.TreesAreValid Queries.BuiltinScenesMatchTheReference Tr
        'EmbreeBuilder\.' Tracer.OrganicMeshFarFromTheOrigin LookaheadTop. Packets.TrianglesOverRays
        Packets.PartlyInactiveAndIncoherent Reinsertion.OptimizesEmbreeTrees Float64Tracer.FeatureRays
        Float64Tracer.TreeEqualsBruteForce Kernels.CallerFlushToZero WideCollapse.SahOptimalPlanBeatsLargestArea
-       CityScene.EveryBuilderGivesAValidTree TerminationAwareBuild.ValidCorrectDeterministic)
+       CityScene.EveryBuilderGivesAValidTree TerminationAwareBuild.ValidCorrectDeterministic
+       TerminationReinsertion. MollerFilter.EveryCertainDecision Cli.BuildWritesConsistentJson
+       Cli.SampleRaysAndTerminationRays 'BuilderOnScene\..*_(interior|interior_rotated|organic)( |$)')
 if [ -z "${SANITIZE_ALL:-}" ]; then
   excluded+="|$(IFS='|'; echo "${heavy[*]}")"
 fi
