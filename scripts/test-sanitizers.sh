@@ -31,7 +31,8 @@ heavy=(ExactSpatialSweep.TreesAreValid Queries.BuiltinScenesMatchTheReference Tr
        Float64Tracer.TreeEqualsBruteForce Kernels.CallerFlushToZero WideCollapse.SahOptimalPlanBeatsLargestArea
        CityScene.EveryBuilderGivesAValidTree TerminationAwareBuild.ValidCorrectDeterministic
        TerminationReinsertion. MollerFilter.EveryCertainDecision Cli.BuildWritesConsistentJson
-       Cli.SampleRaysAndTerminationRays 'BuilderOnScene\..*_(interior|interior_rotated|organic)( |$)')
+       Cli.SampleRaysAndTerminationRays 'BuilderOnScene\..*_(interior|interior_rotated|organic)( |$)'
+       'KernelsOnScene\..*/(interior|interior_rotated|organic)( |$)' TracerWithBuilder.OrganicMeshIsWatertight)
 if [ -z "${SANITIZE_ALL:-}" ]; then
   excluded+="|$(IFS='|'; echo "${heavy[*]}")"
 fi
