@@ -237,6 +237,29 @@ TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
     EXPECT_GE(json["peak_rss_bytes"].get<double>(), scene["rows"][0]["peak_rss_bytes"].get<double>());
 }
 
+// `--runs 0` (the soak's answers-only pass): one timed pass per measurement, no work-per-ray pass, and
+// every row's answers, Embree's tiled packets included, still checked ray for ray.
+TEST_F(Cli, CompareAnswersOnlyChecksEveryRow) {
+    const CliResult r = run("compare builtin:soup --builders cbvh --kernel bvh8,packet8 --embree high --embree-packets high "
+                            "--random 2000 --width 32 --height 32 --runs 0 --build-runs 1 --no-epo --json a.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json rows = read_json("a.json")["scenes"][0]["rows"];
+    ASSERT_EQ(rows.size(), 4u) << rows.dump();
+    for (const nlohmann::json& row : rows) {
+        const std::string name = row["builder"];
+        for (const char* kind : {"random", "primary", "diffuse"}) {
+            const nlohmann::json& k = row[kind];
+            EXPECT_EQ(k["closest_ms_runs"].size(), 1u) << name << " " << kind;
+            EXPECT_EQ(k["occlusion_ms_runs"].size(), 1u) << name << " " << kind;
+            EXPECT_GT(k["closest_mrays"].get<double>(), 0.0) << name << " " << kind;
+            EXPECT_FALSE(k.contains("nodes_per_ray")) << name << " " << kind;
+            ASSERT_TRUE(k.contains("wrong")) << name << " " << kind;
+            if (name.rfind("embree-", 0) != 0) EXPECT_EQ(k["wrong"], 0) << name << " " << kind;
+        }
+    }
+    expect_clean_failure("compare builtin:soup --runs -1", {"--runs"});
+}
+
 // SPACEBVH_EMBREE_CONFIG reaches Embree's device: "verbose=3" makes Embree print the statistics of
 // the BVH it builds for the Embree row (its SAH line); without it, Embree stays silent.
 TEST_F(Cli, EmbreeConfigFromEnvironment) {

@@ -28,7 +28,7 @@ constexpr RayKind kKinds[] = {RayKind::random, RayKind::primary, RayKind::diffus
 
 struct KindResult {
     double closest_mrays = 0, occlusion_mrays = 0;
-    double nodes_per_ray = -1, triangles_per_ray = -1;  // -1: not measured (Embree)
+    double nodes_per_ray = -1, triangles_per_ray = -1;  // -1: not measured (Embree, or --runs 0)
     size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
     std::vector<HitRecord> closest, occlusion;
     std::vector<double> closest_ms, occlusion_ms;  // every timed run, in round-robin order (spread of the median)
@@ -62,25 +62,38 @@ struct Measurement {
 // so on, after one warm-up run each (which also keeps the answers). The machines are shared and their
 // speed drifts over seconds; interleaved, a drift slows every row alike instead of the rows measured
 // during it, so the ratios between rows (ours / Embree) stay honest. Mrays/s = ray count / median time.
+// runs == 0 is the answers-only pass of a soak: the one pass that keeps the answers is also the timed
+// one. A measurement's answers become records right after its first pass, so the raw hits of only one
+// measurement are alive at a time (at 10^7 rays a row's answers are what bounds memory).
 void measure_round_robin(std::vector<Measurement>& measurements, int runs, const std::function<void(double)>& progress) {
     const size_t total = measurements.size() * 2 * size_t(runs + 1);
     size_t done = 0;
+    std::vector<Hit> hits;
+    std::vector<uint8_t> occluded;
     for (const bool occlusion : {false, true}) {
-        std::vector<std::vector<Hit>> hits(measurements.size());
-        std::vector<std::vector<uint8_t>> occluded(measurements.size());
         auto trace = [&](size_t m) {
             Measurement& measurement = measurements[m];
             throw_if_interrupted();
-            if (occlusion) measurement.occluded(measurement.rays, occluded[m]);
-            else measurement.intersect(measurement.rays, hits[m]);
+            hits.resize(occlusion ? 0 : measurement.rays.size());
+            occluded.resize(occlusion ? measurement.rays.size() : 0);
+            if (occlusion) measurement.occluded(measurement.rays, occluded);
+            else measurement.intersect(measurement.rays, hits);
             progress(double(++done) / double(total));
         };
-        for (size_t m = 0; m < measurements.size(); ++m) {
-            hits[m].resize(occlusion ? 0 : measurements[m].rays.size());
-            occluded[m].resize(occlusion ? measurements[m].rays.size() : 0);
-            trace(m);  // warm-up; its answers are the ones checked
-        }
         std::vector<std::vector<double>> ms(measurements.size());
+        for (size_t m = 0; m < measurements.size(); ++m) {
+            Measurement& measurement = measurements[m];
+            const auto start = std::chrono::steady_clock::now();
+            trace(m);  // warm-up; its answers are the ones checked
+            if (runs == 0) ms[m].push_back(milliseconds_since(start));
+            KindResult& result = *measurement.result;
+            std::vector<HitRecord>& records = occlusion ? result.occlusion : result.closest;
+            records.resize(measurement.rays.size());
+            for (size_t i = 0; i < measurement.rays.size(); ++i) {
+                const size_t ray = measurement.order.empty() ? i : measurement.order[i];
+                records[ray] = occlusion ? occlusion_record(occluded[i]) : to_record(hits[i]);
+            }
+        }
         for (int run = 0; run < runs; ++run) {
             for (size_t m = 0; m < measurements.size(); ++m) {
                 const auto start = std::chrono::steady_clock::now();
@@ -89,19 +102,14 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs, const
             }
         }
         for (size_t m = 0; m < measurements.size(); ++m) {
-            Measurement& measurement = measurements[m];
-            KindResult& result = *measurement.result;
-            const double mrays = double(measurement.rays.size()) / median(ms[m]) / 1000.0;
-            std::vector<HitRecord>& records = occlusion ? result.occlusion : result.closest;
-            records.resize(measurement.rays.size());
-            for (size_t i = 0; i < measurement.rays.size(); ++i) {
-                const size_t ray = measurement.order.empty() ? i : measurement.order[i];
-                records[ray] = occlusion ? occlusion_record(occluded[m][i]) : to_record(hits[m][i]);
-            }
+            KindResult& result = *measurements[m].result;
+            const double mrays = double(measurements[m].rays.size()) / median(ms[m]) / 1000.0;
             (occlusion ? result.occlusion_mrays : result.closest_mrays) = mrays;
             (occlusion ? result.occlusion_ms : result.closest_ms) = ms[m];
         }
     }
+    hits = {};
+    occluded = {};
 }
 
 std::string ratio_text(double value, double reference, int precision) {
@@ -183,7 +191,10 @@ void add_compare_command(CLI::App& app) {
         ->capture_default_str();
     command->add_option("--tile", options->tile, "primary rays in tile x tile blocks (what packets trace together); 0: row-major")
         ->capture_default_str();
-    command->add_option("--runs", options->runs, "timed runs per measurement (the median is reported)")->capture_default_str();
+    command->add_option("--runs", options->runs,
+                        "timed runs per measurement (the median is reported); 0: answers only, for soaks (one pass per "
+                        "measurement, itself timed, and no work-per-ray pass)")
+        ->capture_default_str();
     command->add_option("--build-runs", options->build_runs, "builds per builder (the median is reported)")
         ->capture_default_str();
     command->add_option("--random", options->random_count, "random rays per scene")->capture_default_str();
@@ -202,7 +213,7 @@ void add_compare_command(CLI::App& app) {
     command->callback([options, command] {
         const auto limit = options->common.thread_limit();
         const InterruptScope interrupts;  // Ctrl-C stops between measurements (and inside our builds)
-        if (options->runs < 1 || options->runs > 1000) throw Error("--runs must be in [1, 1000]");
+        if (options->runs < 0 || options->runs > 1000) throw Error("--runs must be in [0, 1000]");
         if (options->build_runs < 1 || options->build_runs > 1000) throw Error("--build-runs must be in [1, 1000]");
         if (options->random_count == 0 || options->random_count > (size_t(1) << 31))
             throw Error("--random must be in [1, 2^31]");
@@ -303,6 +314,7 @@ void add_compare_command(CLI::App& app) {
                         const auto& rays = ray_sets[int(kind)];
                         add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
                                         [tracer](auto r, auto o) { tracer->occluded(r, o); });
+                        if (options->runs == 0) continue;  // answers only: no work-per-ray pass
                         TraversalStats stats;
                         std::vector<Hit> hits(rays.size());
                         tracer->intersect(rays, hits, &stats);
