@@ -83,10 +83,18 @@ void check_decisions(const trace::TrianglePack& pack, const trace::PackPlanes& p
         tally.certain_within += within;
         tally.certain_rejected += rejected;
         SCOPED_TRACE(what + ", triangle " + std::to_string(pack.primitive[lane]));
-        if (inside) EXPECT_TRUE(crosses_line) << "certainly inside, but the arbiter's line misses";
-        if (rejected && !inside) EXPECT_FALSE(crosses_line) << "certainly outside, but the arbiter's line crosses";
-        if (rejected) EXPECT_FALSE(hit) << "rejected, but the arbiter hits in [tmin, tmax]";
-        if (within) EXPECT_TRUE(hit) << "certain hit, but the arbiter misses";
+        if (inside) {
+            EXPECT_TRUE(crosses_line) << "certainly inside, but the arbiter's line misses";
+        }
+        if (rejected && !inside) {
+            EXPECT_FALSE(crosses_line) << "certainly outside, but the arbiter's line crosses";
+        }
+        if (rejected) {
+            EXPECT_FALSE(hit) << "rejected, but the arbiter hits in [tmin, tmax]";
+        }
+        if (within) {
+            EXPECT_TRUE(hit) << "certain hit, but the arbiter misses";
+        }
         EXPECT_FALSE(within && rejected);
     }
 }

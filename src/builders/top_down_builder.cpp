@@ -46,7 +46,7 @@ struct TopDownBuilder::Impl {
     // CentroidOrder{y} and {z} at the same places in these two copies, so that no node sorts
     // (two more copies of the references buy a build without a sort per node).
     bool keeps_orders = false;
-    std::array<std::vector<Reference>, 2> other_orders;
+    std::array<std::vector<Reference>, 2> other_orders{};
     size_t input_count = 0;
     std::vector<SlotNode> slots{};
     std::atomic<size_t> references_in_leaves{0};

@@ -75,7 +75,10 @@ uint32_t parse_search_spaces(const std::string& names) {
 std::string search_space_names(uint32_t spaces) {
     std::string names;
     for (const SearchSpaceName& entry : kSearchSpaceNames)
-        if (spaces & uint32_t(entry.space)) names += (names.empty() ? "" : "+") + std::string(entry.name);
+        if (spaces & uint32_t(entry.space)) {
+            if (!names.empty()) names += '+';
+            names += entry.name;
+        }
     return names;
 }
 
