@@ -44,6 +44,9 @@ struct Row {
     std::optional<CostModel> cost;
     KindResult kinds[3];
     size_t peak_rss_bytes = 0;  // the process's peak resident set when the row was done
+    // Nodes and leaf triangle data of the random rays' tracer (Embree: what its commit allocated) per
+    // triangle of the scene; -1 if not known.
+    double layout_bytes_per_triangle = -1;
 };
 
 // One timed measurement: a row's tracer (ours or Embree's) on one ray kind, closest hits and
@@ -310,6 +313,8 @@ void add_compare_command(CLI::App& app) {
                         const Tracer*& tracer = by_kernel[name];
                         if (!tracer) tracer = tracers.emplace_back(make_tracer(name, scene, bvh)).get();
                         row.kernels[int(kind)] = tracer->name();
+                        if (kind == RayKind::random)
+                            row.layout_bytes_per_triangle = double(tracer->memory_bytes()) / double(scene.triangles.size());
                         KindResult& result = row.kinds[int(kind)];
                         const auto& rays = ray_sets[int(kind)];
                         add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
@@ -351,6 +356,7 @@ void add_compare_command(CLI::App& app) {
                 }
                 row.build_ms = median(build_ms);
                 row.build_ms_runs = build_ms;
+                row.layout_bytes_per_triangle = double(embree->memory_bytes()) / double(scene.triangles.size());
                 const EmbreeScene* traced = embree.get();
                 for (RayKind kind : kKinds) {
                     KindResult& result = row.kinds[int(kind)];
@@ -418,6 +424,7 @@ void add_compare_command(CLI::App& app) {
                                            {"build_ms_runs", row.build_ms_runs},
                                            {"peak_rss_bytes", row.peak_rss_bytes}};
                 if (row.cost) json_row["cost"] = row.cost->describe();
+                if (row.layout_bytes_per_triangle >= 0) json_row["layout_bytes_per_triangle"] = row.layout_bytes_per_triangle;
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
                     json_row["references"] = row.stats->references;
@@ -449,6 +456,12 @@ void add_compare_command(CLI::App& app) {
                 std::printf(" %s |\n", verify ? std::to_string(wrong).c_str() : "-");
                 json_rows.push_back(json_row);
             }
+            std::printf("\nlayout B/tri (nodes + leaf triangles; Embree: its commit's allocations):");
+            for (const Row& row : rows)
+                if (row.layout_bytes_per_triangle >= 0)
+                    std::printf(" %s %s %.1f;", row.name.c_str(), row.kernels[0].empty() ? row.kernel.c_str() : row.kernels[0].c_str(),
+                                row.layout_bytes_per_triangle);
+            std::printf("\n");
             std::printf("\npeak memory so far: %.1f MiB resident (whole process)\n\n",
                         double(peak_rss_bytes()) / (1024.0 * 1024.0));
             std::fflush(stdout);

@@ -71,6 +71,14 @@ enum class LeafTest {
     moller,
 };
 
+// How the single-ray 8-wide kernel stores its nodes. Both give the exact arbiter's answers.
+enum class NodeFormat {
+    full,  // float child boxes: 256 bytes per node (four cache lines)
+    // Child boxes as 8-bit codes on a per-node grid, rounded outward (no box shrinks): 128 bytes per
+    // node (two cache lines); decoding costs a convert and an fma per plane (kernel name "bvh8q").
+    quantized,
+};
+
 // How a binary tree is collapsed into wide nodes.
 enum class WideCollapse {
     // Ylitie, Karras, Laine 2017: the cheapest cut of the binary tree into wide nodes under a wide
@@ -86,12 +94,14 @@ struct TracerConfig {
     WideCollapse collapse = WideCollapse::sah_optimal;  // wide and packet kernels
     uint32_t packet_size = 0;  // packet kernels: rays per packet, 1..256; 0 = the kernel's tile (64, 256)
     LeafTest leaf_test = LeafTest::watertight;  // bvh4 and bvh8 only
+    NodeFormat node_format = NodeFormat::full;  // bvh8 only
 };
 
 const char* to_string(Kernel kernel);          // "bvh8"
 const char* to_string(NodeTest test);          // "avx2"
 const char* to_string(WideCollapse collapse);  // "sah", "area"
 const char* to_string(LeafTest leaf_test);      // "watertight", "moller"
+const char* to_string(NodeFormat format);       // "full", "quantized"
 // The node tests available for `width` (4 or 8) on this CPU, "best" excluded, slowest first.
 std::vector<NodeTest> supported_node_tests(int width);
 
@@ -120,7 +130,7 @@ public:
 
     size_t memory_bytes() const;  // nodes + leaf triangle data
     size_t node_count() const;    // nodes of the layout
-    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "packet8-avx512@area"
+    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "bvh8q-avx2", "packet8-avx512@area"
     const TracerConfig& config() const;  // with node_test resolved
 
     struct Impl;

@@ -14,9 +14,14 @@ int width_of(Kernel kernel) { return kernel == Kernel::bvh4 ? 4 : 8; }
 
 TracerConfig parse_kernel(const std::string& name) {
     // A wide kernel may end in "@area": Embree's collapse instead of the SAH-optimal one; a bvh4 or
-    // bvh8 kernel's name may end (before the @) in "+moller": the moller leaf test.
+    // bvh8 kernel's name may end (before the @) in "+moller": the moller leaf test; "bvh8q" is bvh8 over
+    // quantized nodes.
     std::string kernel = name;
     TracerConfig config;
+    if (kernel.rfind("bvh8q", 0) == 0) {
+        config.node_format = NodeFormat::quantized;
+        kernel.erase(4, 1);
+    }
     bool collapse_given = false;
     if (const size_t at = kernel.find('@'); at != std::string::npos) {
         const std::string suffix = kernel.substr(at + 1);
@@ -37,6 +42,7 @@ TracerConfig parse_kernel(const std::string& name) {
     for (Kernel wide : kWideKernels) {
         const std::string prefix = to_string(wide);
         config.kernel = wide;
+        if (config.node_format == NodeFormat::quantized && wide != Kernel::bvh8) continue;
         if (kernel == prefix) return config;
         for (NodeTest test : kNodeTests) {
             config.node_test = test;
@@ -64,6 +70,12 @@ std::vector<std::string> kernel_names() {
         for (NodeTest test : supported_node_tests(width_of(wide)))
             if (test != NodeTest::scalar) names.push_back(prefix + "-" + to_string(test) + "+moller");
     }
+    // bvh8 over quantized nodes, with either leaf test.
+    names.push_back("bvh8q");
+    for (NodeTest test : supported_node_tests(8)) names.push_back(std::string("bvh8q-") + to_string(test));
+    names.push_back("bvh8q+moller");
+    for (NodeTest test : supported_node_tests(8))
+        if (test != NodeTest::scalar) names.push_back(std::string("bvh8q-") + to_string(test) + "+moller");
     return names;
 }
 

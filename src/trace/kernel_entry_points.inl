@@ -29,6 +29,23 @@ struct Kernels {
     static bool occluded_moller_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
         return traverse<S, true, true, true>(*static_cast<const WideLayout<S::kLanes>*>(layout), ray, hit, stats);
     }
+    // Over quantized nodes (quantized_layout.hpp), either leaf test; 8-wide policies only.
+    template <bool kMoller>
+    static bool quantized_closest(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, false, false, kMoller>(*static_cast<const QuantizedLayout8*>(layout), ray, hit, nullptr);
+    }
+    template <bool kMoller>
+    static bool quantized_closest_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, false, true, kMoller>(*static_cast<const QuantizedLayout8*>(layout), ray, hit, stats);
+    }
+    template <bool kMoller>
+    static bool quantized_occluded(const void* layout, const Ray& ray, Hit& hit) {
+        return traverse<S, true, false, kMoller>(*static_cast<const QuantizedLayout8*>(layout), ray, hit, nullptr);
+    }
+    template <bool kMoller>
+    static bool quantized_occluded_stats(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+        return traverse<S, true, true, kMoller>(*static_cast<const QuantizedLayout8*>(layout), ray, hit, stats);
+    }
     static void packet_closest(const void* layout, const Ray* rays, uint32_t count, Hit* hits, TraversalStats* stats) {
         const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
         if (stats) trace_packet<S, false, true>(wide, rays, count, hits, nullptr, stats);

@@ -11,6 +11,7 @@
 
 #include "trace/kernels.hpp"
 #include "trace/moller_filter.hpp"
+#include "trace/quantized_layout.hpp"
 #include "trace/traversal_common.hpp"
 #include "trace/visit_order.hpp"
 #include "trace/watertight_triangle.hpp"
@@ -68,6 +69,16 @@ struct Policy {
     static F fmsub(const F& a, const F& b, const F& c) {
         F r;
         for (int i = 0; i < W; ++i) r.lane[i] = std::fma(a.lane[i], b.lane[i], -c.lane[i]);
+        return r;
+    }
+    static F fmadd(const F& a, const F& b, const F& c) {
+        F r;
+        for (int i = 0; i < W; ++i) r.lane[i] = std::fma(a.lane[i], b.lane[i], c.lane[i]);
+        return r;
+    }
+    static F load_u8(const uint8_t* p) {
+        F r;
+        for (int i = 0; i < W; ++i) r.lane[i] = float(p[i]);
         return r;
     }
     static unsigned less_mask(const F& a, const F& b) {
@@ -144,6 +155,11 @@ struct Avx2Operations {
     static F div(F a, F b) { return _mm256_div_ps(a, b); }
     static F abs(F a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.0f), a); }
     static F fmsub(F a, F b, F c) { return _mm256_fmsub_ps(a, b, c); }
+    static F fmadd(F a, F b, F c) { return _mm256_fmadd_ps(a, b, c); }
+    // Eight codes (quantized nodes) to floats: a zero-extending load and a convert.
+    static F load_u8(const uint8_t* p) {
+        return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+    }
     static unsigned less_mask(F a, F b) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
     static unsigned hit_mask(F near, F limit) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ))); }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
@@ -242,12 +258,27 @@ constexpr SingleRayKernels table_of(LeafTest leaf_test) {
     return {&K::closest, &K::closest_stats, &K::occluded, &K::occluded_stats};
 }
 template <class K>
+constexpr SingleRayKernels quantized_table_of(LeafTest leaf_test) {
+    if (leaf_test == LeafTest::moller)
+        return {&K::template quantized_closest<true>, &K::template quantized_closest_stats<true>, &K::template quantized_occluded<true>,
+                &K::template quantized_occluded_stats<true>};
+    return {&K::template quantized_closest<false>, &K::template quantized_closest_stats<false>, &K::template quantized_occluded<false>,
+            &K::template quantized_occluded_stats<false>};
+}
+template <class K>
 constexpr PacketKernels packet_table_of() {
     return {&K::packet_closest, &K::packet_occluded};
 }
 }  // namespace
 
-SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test) {
+SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test, NodeFormat format) {
+    if (format == NodeFormat::quantized) {
+        switch (test) {
+            case NodeTest::avx2: return quantized_table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
+            case NodeTest::avx512: return quantized_table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
+            default: return quantized_table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
+        }
+    }
     if (width == 4) {
         switch (test) {
             case NodeTest::sse: return table_of<sse_kernels::Kernels<sse_kernels::Policy>>(leaf_test);

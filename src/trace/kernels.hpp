@@ -12,14 +12,16 @@ namespace spacebvh::trace {
 bool cpu_has(NodeTest test);
 bool width_has(int width, NodeTest test);
 
-// Single rays over a WideLayout<width> (passed as const void*). Stats may not be null in *_stats.
+// Single rays over a WideLayout<width>, or a QuantizedLayout8 for NodeFormat::quantized (passed as
+// const void*). Stats may not be null in *_stats.
 struct SingleRayKernels {
     bool (*closest)(const void* layout, const Ray& ray, Hit& hit);
     bool (*closest_stats)(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats);
     bool (*occluded)(const void* layout, const Ray& ray, Hit& hit);
     bool (*occluded_stats)(const void* layout, const Ray& ray, Hit& hit, TraversalStats* stats);
 };
-SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test = LeafTest::watertight);
+SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test = LeafTest::watertight,
+                                    NodeFormat format = NodeFormat::full);
 
 // A packet of `count` (<= kMaxPacket) rays over a WideLayout<8>. Stats may be null.
 inline constexpr uint32_t kMaxPacket = 256;

@@ -10,6 +10,7 @@
 #include "spacebvh/error.hpp"
 #include "trace/binary_layout.hpp"
 #include "trace/kernels.hpp"
+#include "trace/quantized_layout.hpp"
 #include "trace/traversal_common.hpp"
 #include "trace/wide_layout.hpp"
 
@@ -42,6 +43,8 @@ const char* to_string(WideCollapse collapse) { return collapse == WideCollapse::
 
 const char* to_string(LeafTest leaf_test) { return leaf_test == LeafTest::moller ? "moller" : "watertight"; }
 
+const char* to_string(NodeFormat format) { return format == NodeFormat::quantized ? "quantized" : "full"; }
+
 std::vector<NodeTest> supported_node_tests(int width) {
     std::vector<NodeTest> tests;
     for (NodeTest test : {NodeTest::scalar, NodeTest::sse, NodeTest::avx2, NodeTest::avx512})
@@ -52,7 +55,7 @@ std::vector<NodeTest> supported_node_tests(int width) {
 struct Tracer::Impl {
     TracerConfig config;
     uint32_t packet_size = 0;  // 0: single rays; else rays per packet
-    std::variant<trace::BinaryLayout, trace::WideLayout<4>, trace::WideLayout<8>> layout;
+    std::variant<trace::BinaryLayout, trace::WideLayout<4>, trace::WideLayout<8>, trace::QuantizedLayout8> layout;
     trace::SingleRayKernels single{};
     trace::PacketKernels packets{};
 
@@ -101,6 +104,9 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
     if (config.leaf_test != LeafTest::watertight && (width == 2 || packet_size))
         throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no leaf test '" + to_string(config.leaf_test) +
                     "' (bvh4 and bvh8 only)");
+    if (config.node_format != NodeFormat::full && (config.kernel != Kernel::bvh8))
+        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no node format '" + to_string(config.node_format) +
+                    "' (bvh8 only)");
     if (width == 2) {
         if (config.node_test != NodeTest::best || config.collapse != WideCollapse::sah_optimal)
             throw Error("the binary kernel takes no node test and no collapse");
@@ -116,11 +122,16 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
         const auto add_planes = [&](auto& layout) {
             if (config.leaf_test == LeafTest::moller) layout.planes = trace::make_pack_planes(layout.packs);
         };
-        if (width == 4)
+        if (width == 4) {
             add_planes(impl_->layout.emplace<1>(trace::collapse_to_wide<4>(store.triangles(), bvh, config.collapse)));
-        else
+        } else if (config.node_format == NodeFormat::quantized) {
+            trace::WideLayout<8> wide = trace::collapse_to_wide<8>(store.triangles(), bvh, config.collapse);
+            add_planes(wide);
+            impl_->layout.emplace<3>(trace::quantize_wide(std::move(wide)));
+        } else {
             add_planes(impl_->layout.emplace<2>(trace::collapse_to_wide<8>(store.triangles(), bvh, config.collapse)));
-        impl_->single = trace::single_ray_kernels(width, config.node_test, config.leaf_test);
+        }
+        impl_->single = trace::single_ray_kernels(width, config.node_test, config.leaf_test, config.node_format);
         if (packet_size) impl_->packets = trace::packet_kernels(config.node_test);
     }
     impl_->packet_size = packet_size;
@@ -233,6 +244,7 @@ size_t Tracer::node_count() const {
 std::string Tracer::name() const {
     const TracerConfig& c = impl_->config;
     std::string name = to_string(c.kernel);
+    if (c.node_format == NodeFormat::quantized) name += "q";
     if (c.kernel != Kernel::binary) name += std::string("-") + to_string(c.node_test);
     if (impl_->packet_size && impl_->packet_size != packet_size_of(c.kernel)) name += "-x" + std::to_string(impl_->packet_size);
     if (c.leaf_test != LeafTest::watertight) name += std::string("+") + to_string(c.leaf_test);

@@ -50,6 +50,27 @@ template <class S>
     return S::hit_mask(near, far);
 }
 
+// The same for a quantized node (quantized_layout.hpp): each plane decoded exactly as the encoder
+// checked it, fma(float(code), scale, origin) rounded once, so the decoded box contains the child's
+// float box and the fused slab test on it stays conservative. Slots without a child are masked off.
+// Needs the policy's load_u8 (eight codes to floats) and fmadd (8-wide policies only).
+template <class S>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S>& ray, float tmin, float tmax,
+                                                      typename S::F& near) {
+    near = S::set1(tmin);
+    typename S::F far = S::set1(tmax);
+    for (int axis = 0; axis < 3; ++axis) {
+        const typename S::F scale = S::set1(node.scale[axis]), origin = S::set1(node.origin[axis]);
+        const typename S::F entry_plane = S::fmadd(S::load_u8(node.q[ray.entry_plane[axis]]), scale, origin);
+        const typename S::F exit_plane = S::fmadd(S::load_u8(node.q[ray.exit_plane[axis]]), scale, origin);
+        const typename S::F t_entry = S::fmsub(entry_plane, ray.entry_scale[axis], ray.entry_offset[axis]);
+        const typename S::F t_exit = S::fmsub(exit_plane, ray.exit_scale[axis], ray.exit_offset[axis]);
+        near = S::max(t_entry, near);
+        far = S::min(t_exit, far);
+    }
+    return S::hit_mask(near, far) & node.used_mask;
+}
+
 // The packet kernel's test of one ray against all child boxes (`Boxes`: its origin and inverse
 // direction broadcast): the subtract-multiply slab test, lane-parallel, with the operand order of
 // rays_entering_child (a NaN from 0 * inf, a ray lying in a slab plane, leaves the running bound
@@ -88,8 +109,8 @@ template <class S, bool kAnyHit, bool kStats>
 // neighbourhood they must cross but which rarely occludes them. Farthest first tests fewer boxes
 // per occlusion ray than slot order for every ray kind, and far fewer than nearest first for
 // diffuse rays.
-template <bool kAnyHit, int W>
-[[gnu::always_inline]] inline bool visits_after(const WideNode<W>& node, float entry_a, uint32_t slot_a, float entry_b,
+template <bool kAnyHit, class Node>
+[[gnu::always_inline]] inline bool visits_after(const Node& node, float entry_a, uint32_t slot_a, float entry_b,
                                                  uint32_t slot_b) {
     if constexpr (kAnyHit) {
         const bool leaf_a = node.count[slot_a] != 0, leaf_b = node.count[slot_b] != 0;
@@ -100,17 +121,17 @@ template <bool kAnyHit, int W>
     }
 }
 
-template <int W>
-[[gnu::always_inline]] inline void prefetch_node(const WideNode<W>& node) {
-    for (size_t line = 0; line < sizeof(WideNode<W>); line += 64)
+template <class Node>
+[[gnu::always_inline]] inline void prefetch_node(const Node& node) {
+    for (size_t line = 0; line < sizeof(Node); line += 64)
         _mm_prefetch(reinterpret_cast<const char*>(&node) + line, _MM_HINT_T0);
 }
 
-// Starts fetching a child the ray will visit soon: an inner node's four lines, or the first triangle
-// pack of a leaf (three lines); traversal is bound by the latency of these fetches.
+// Starts fetching a child the ray will visit soon: an inner node's lines (four, or two quantized), or
+// the first triangle pack of a leaf (three lines); traversal is bound by the latency of these fetches.
 // With the moller leaf test (`planes` not null), the leaf's planes line too.
-template <int W>
-[[gnu::always_inline]] inline void prefetch_child(const WideNode<W>* nodes, const TrianglePack* packs, const PackPlanes* planes,
+template <class Node>
+[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const TrianglePack* packs, const PackPlanes* planes,
                                                   uint32_t child, uint32_t count) {
     if (count == 0) {
         prefetch_node(nodes[child]);
@@ -128,13 +149,15 @@ struct NoMollerRay {
 // Closest hit (kAnyHit = false) or any hit. Children a ray enters are visited nearest first; entries
 // on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
 // skipped when popped. kMoller: leaves take the moller leaf test (moller_filter.hpp) on layout.planes.
-template <class S, bool kAnyHit, bool kStats, bool kMoller = false>
-bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+// Layout: WideLayout<S::kLanes>, or QuantizedLayout8 for an 8-wide policy.
+template <class S, bool kAnyHit, bool kStats, bool kMoller = false, class Layout>
+bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
+    using Node = typename decltype(layout.nodes)::value_type;
     const RayBoxes<S> boxes(ray);
     // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and would
     // load them from memory at every node of a closest-hit walk.
-    const WideNode<W>* const nodes = layout.nodes.data();
+    const Node* const nodes = layout.nodes.data();
     const TrianglePack* const packs = layout.packs.data();
     const PackPlanes* const planes = kMoller ? layout.planes.data() : nullptr;
     const std::conditional_t<kMoller, MollerRay, NoMollerRay> moller(ray);
@@ -158,7 +181,7 @@ bool traverse(const WideLayout<S::kLanes>& layout, const Ray& ray, Hit& hit, Tra
 
     while (true) {
         if (current.count == 0) {
-            const WideNode<W>& node = nodes[current.child];
+            const Node& node = nodes[current.child];
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.used(slot);
             typename S::F near;
