@@ -313,7 +313,7 @@ void add_compare_command(CLI::App& app) {
                         const Tracer*& tracer = by_kernel[name];
                         if (!tracer) tracer = tracers.emplace_back(make_tracer(name, scene, bvh)).get();
                         row.kernels[int(kind)] = tracer->name();
-                        if (kind == RayKind::random)
+                        if (kind == RayKind::random && !scene.triangles.empty())
                             row.layout_bytes_per_triangle = double(tracer->memory_bytes()) / double(scene.triangles.size());
                         KindResult& result = row.kinds[int(kind)];
                         const auto& rays = ray_sets[int(kind)];
@@ -356,7 +356,8 @@ void add_compare_command(CLI::App& app) {
                 }
                 row.build_ms = median(build_ms);
                 row.build_ms_runs = build_ms;
-                row.layout_bytes_per_triangle = double(embree->memory_bytes()) / double(scene.triangles.size());
+                if (!scene.triangles.empty())
+                    row.layout_bytes_per_triangle = double(embree->memory_bytes()) / double(scene.triangles.size());
                 const EmbreeScene* traced = embree.get();
                 for (RayKind kind : kKinds) {
                     KindResult& result = row.kinds[int(kind)];
