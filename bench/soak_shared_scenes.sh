@@ -18,7 +18,7 @@ if [ ! -d ../shared/scenes ]; then echo "no ../shared/scenes: nothing to soak" >
 rays=${RAYS:-10000000}
 side=$(python3 -c "import math; print(max(1, math.isqrt($rays)))")
 read -r -a builders <<< "${BUILDERS:-cbvh binned kdbvh spatial sbvh esc evh}"
-read -r -a groups <<< "${KERNEL_GROUPS:-binary,bvh4,bvh8,packet8,packet16,bvh4+moller,bvh8+moller bvh4-scalar,bvh8-scalar,packet8-scalar,packet16-scalar}"
+read -r -a groups <<< "${KERNEL_GROUPS:-binary,bvh4,bvh8,bvh8q,packet8,packet16,bvh4+moller,bvh8+moller,bvh8q+moller bvh4-scalar,bvh8-scalar,bvh8q-scalar,packet8-scalar,packet16-scalar}"
 root=${BENCH_OUT:-bench/out}/soak
 [ -n "${FRESH:-}" ] && rm -rf "$root"
 read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated}"
