@@ -20,6 +20,7 @@ def main() -> int:
         return 0
     ours_wrong = 0
     answers = 0
+    fewest = None  # the fewest rays of any kind in any row of ours
     print("| scene | builder | kernel | " + " | ".join(f"{k} rays" for k in KINDS) + " | wrong (ours) |")
     print("|---|---|---|" + "---:|" * (len(KINDS) + 1))
     embree_lines = []
@@ -37,9 +38,11 @@ def main() -> int:
                     continue
                 ours_wrong += wrong
                 answers += 2 * sum(counts)
+                fewest = min(counts) if fewest is None else min(fewest, min(counts))
                 print(f"{line} | {wrong} |")
     print()
-    print(f"ours: {answers} answers checked (closest + occlusion), {ours_wrong} wrong")
+    print(f"ours: {answers} answers checked (closest + occlusion), {ours_wrong} wrong; "
+          f"fewest rays of one kind in a row: {fewest}")
     if embree_lines:
         print()
         print("Embree HIGH's own rows, checked against our first row (Embree is not watertight):")
