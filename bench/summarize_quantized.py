@@ -55,7 +55,8 @@ def main(dirs):
     print("|---|" + "---:|" * (len(LAYOUTS) + 1))
     for stem in stems:
         rows = by_layout(os.path.join(dirs[0], f"quantized_{stem}.json"))
-        cells = [f"{rows[k]['layout_bytes_per_triangle']:.1f}" if k in rows else "-" for k in LAYOUTS + ["embree"]]
+        cells = [f"{rows[k].get('layout_bytes_per_triangle', rows[k].get('allocated_bytes_per_triangle')):.1f}"
+                 if k in rows else "-" for k in LAYOUTS + ["embree"]]
         print(f"| {stem} | " + " | ".join(cells) + " |")
     return 0 if wrong == 0 else 1
 

@@ -32,7 +32,8 @@ heavy=(ExactSpatialSweep.TreesAreValid Queries.BuiltinScenesMatchTheReference Tr
        CityScene.EveryBuilderGivesAValidTree TerminationAwareBuild.ValidCorrectDeterministic
        TerminationReinsertion. MollerFilter.EveryCertainDecision Cli.BuildWritesConsistentJson
        Cli.SampleRaysAndTerminationRays 'BuilderOnScene\..*_(interior|interior_rotated|organic)( |$)'
-       'KernelsOnScene\..*/(interior|interior_rotated|organic)( |$)' TracerWithBuilder.OrganicMeshIsWatertight)
+       'KernelsOnScene\..*/(interior|interior_rotated|organic)( |$)' TracerWithBuilder.OrganicMeshIsWatertight
+       'QuantizedKernels.AnswerAsTheArbiterOn(HugeTinyAndFar|FlatAndScattered)Scenes')
 if [ -z "${SANITIZE_ALL:-}" ]; then
   excluded+="|$(IFS='|'; echo "${heavy[*]}")"
 fi

@@ -425,7 +425,10 @@ void add_compare_command(CLI::App& app) {
                                            {"build_ms_runs", row.build_ms_runs},
                                            {"peak_rss_bytes", row.peak_rss_bytes}};
                 if (row.cost) json_row["cost"] = row.cost->describe();
-                if (row.layout_bytes_per_triangle >= 0) json_row["layout_bytes_per_triangle"] = row.layout_bytes_per_triangle;
+                // Ours: the layout's exact size; Embree's: what its allocators reserved, which varies
+                // with the thread count, hence another name (not part of a run's deterministic result).
+                if (row.layout_bytes_per_triangle >= 0)
+                    json_row[row.stats ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
                     json_row["references"] = row.stats->references;

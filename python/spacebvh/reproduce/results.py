@@ -55,7 +55,7 @@ def build_ms_spread(row: dict) -> tuple[float, float, float]:
 # Keys whose values depend on the machine or the moment, not on the inputs.
 TIMING_KEYS = {"build_ms", "build_ms_runs", "closest_mrays", "occlusion_mrays", "closest_ms_runs", "occlusion_ms_runs",
                "peak_rss_bytes", "wall_s", "load_ms", "host", "platform", "started", "threads", "stdout", "commands",
-               "output", "png_base64"}
+               "output", "png_base64", "allocated_bytes_per_triangle"}
 
 
 def deterministic(value):
