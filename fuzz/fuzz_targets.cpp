@@ -46,8 +46,12 @@ std::vector<Ray> probe_rays() {
 void trace_all(const Bvh& bvh) {
     const MeshView mesh(fuzz_geometry());
     const std::vector<Ray> rays = probe_rays();
-    for (const Kernel kernel : {Kernel::automatic, Kernel::binary, Kernel::packet8}) {
-        const Tracer tracer(mesh, bvh, kernel);
+    // The layouts a loaded tree is converted into: wide float nodes, the binary layout, packets, and
+    // quantized nodes (whose encoder must cope with whatever boxes a file holds).
+    TracerConfig quantized{Kernel::bvh8};
+    quantized.node_format = NodeFormat::quantized;
+    for (const TracerConfig& config : {TracerConfig{Kernel::automatic}, TracerConfig{Kernel::binary}, TracerConfig{Kernel::packet8}, quantized}) {
+        const Tracer tracer(mesh, bvh, config);
         std::vector<Hit> hits(rays.size());
         tracer.intersect(rays, hits);
         std::vector<uint8_t> occluded(rays.size());
