@@ -8,11 +8,12 @@
 # Usage: [RAYS=10000000] [BUILDERS=...] [KERNEL_GROUPS="a,b c,d"] [STEMS=...] [FRESH=1] bash bench/soak_shared_scenes.sh
 # RAYS random rays per scene; primary rays from a square image large enough that at least RAYS primary
 # rays and at least RAYS diffuse rays (one bounce per primary hit) are traced: a 256x256 probe of the
-# scene's coverage sizes the image (a scene that fills a quarter of the view gets 4x RAYS primary rays). Kernels run in two groups (one compare process per builder and group: the SIMD kernels,
-# then the scalar reference kernels) so the answers one process keeps stay within about 5 GiB at 10^7
-# rays. Each (builder, kernel group, scene) cell is one process
-# whose JSON is kept under $BENCH_OUT/soak/BUILDER/GROUP/; a cell whose JSON exists is skipped, so an
-# interrupted soak resumes where it stopped (at 10^7 rays the whole soak takes hours). FRESH=1 starts over.
+# scene's coverage sizes the image (a scene that fills a quarter of the view gets 4x RAYS primary rays).
+# Kernels run in two groups (one compare process per builder and group: the SIMD kernels, then the
+# scalar reference kernels) so the answers one process keeps stay within about 5 GiB at 10^7 rays.
+# Each (builder, kernel group, scene) cell is one process whose JSON is kept under
+# $BENCH_OUT/soak/BUILDER/GROUP/; a cell whose JSON exists is skipped, so an interrupted soak resumes
+# where it stopped (at 10^7 rays the whole soak takes hours). FRESH=1 starts over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ ! -d ../shared/scenes ]; then echo "no ../shared/scenes: nothing to soak" >&2; exit 0; fi

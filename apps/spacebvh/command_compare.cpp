@@ -111,8 +111,6 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs, const
             (occlusion ? result.occlusion_ms : result.closest_ms) = ms[m];
         }
     }
-    hits = {};
-    occluded = {};
 }
 
 std::string ratio_text(double value, double reference, int precision) {
@@ -428,7 +426,7 @@ void add_compare_command(CLI::App& app) {
                 // Ours: the layout's exact size; Embree's: what its allocators reserved, which varies
                 // with the thread count, hence another name (not part of a run's deterministic result).
                 if (row.layout_bytes_per_triangle >= 0)
-                    json_row[row.stats ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
+                    json_row[ours ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
                 if (ours) {
                     json_row["nodes"] = row.stats->nodes;
                     json_row["references"] = row.stats->references;
