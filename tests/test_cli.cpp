@@ -229,6 +229,7 @@ TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
             if (std::string(name).rfind("embree-", 0) != 0) {
                 EXPECT_EQ((*row)[kind]["wrong"], 0) << name << " " << kind;
                 EXPECT_GT((*row)[kind]["nodes_per_ray"].get<double>(), 0.0) << name << " " << kind;
+                EXPECT_GT((*row)[kind]["occlusion_nodes_per_ray"].get<double>(), 0.0) << name << " " << kind;
             }
             EXPECT_GT((*row)[kind]["closest_mrays"].get<double>(), 0.0) << name << " " << kind;
         }
@@ -252,7 +253,7 @@ TEST_F(Cli, CompareAnswersOnlyChecksEveryRow) {
             EXPECT_EQ(k["closest_ms_runs"].size(), 1u) << name << " " << kind;
             EXPECT_EQ(k["occlusion_ms_runs"].size(), 1u) << name << " " << kind;
             EXPECT_GT(k["closest_mrays"].get<double>(), 0.0) << name << " " << kind;
-            EXPECT_FALSE(k.contains("nodes_per_ray")) << name << " " << kind;
+            EXPECT_FALSE(k.contains("nodes_per_ray") || k.contains("occlusion_nodes_per_ray")) << name << " " << kind;
             ASSERT_TRUE(k.contains("wrong")) << name << " " << kind;
             if (name.rfind("embree-", 0) != 0) {
                 EXPECT_EQ(k["wrong"], 0) << name << " " << kind;

@@ -28,7 +28,10 @@ constexpr RayKind kKinds[] = {RayKind::random, RayKind::primary, RayKind::diffus
 
 struct KindResult {
     double closest_mrays = 0, occlusion_mrays = 0;
-    double nodes_per_ray = -1, triangles_per_ray = -1;  // -1: not measured (Embree, or --runs 0)
+    // Work per ray of closest-hit and of occlusion queries (an occlusion ray stops at its first hit
+    // found, so the two differ by what early termination saves); -1: not measured (Embree, or --runs 0).
+    double nodes_per_ray = -1, triangles_per_ray = -1;
+    double occlusion_nodes_per_ray = -1, occlusion_triangles_per_ray = -1;
     size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
     std::vector<HitRecord> closest, occlusion;
     std::vector<double> closest_ms, occlusion_ms;  // every timed run, in round-robin order (spread of the median)
@@ -318,12 +321,16 @@ void add_compare_command(CLI::App& app) {
                         add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
                                         [tracer](auto r, auto o) { tracer->occluded(r, o); });
                         if (options->runs == 0) continue;  // answers only: no work-per-ray pass
-                        TraversalStats stats;
+                        TraversalStats stats, occlusion_stats;
                         std::vector<Hit> hits(rays.size());
                         tracer->intersect(rays, hits, &stats);
-                        const double n = std::max<double>(1.0, double(hits.size()));
+                        std::vector<uint8_t> occluded(rays.size());
+                        tracer->occluded(rays, occluded, &occlusion_stats);
+                        const double n = std::max<double>(1.0, double(rays.size()));
                         result.nodes_per_ray = double(stats.nodes_visited) / n;
                         result.triangles_per_ray = double(stats.triangles_tested) / n;
+                        result.occlusion_nodes_per_ray = double(occlusion_stats.nodes_visited) / n;
+                        result.occlusion_triangles_per_ray = double(occlusion_stats.triangles_tested) / n;
                     }
                     row.peak_rss_bytes = peak_rss_bytes();
                     row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
@@ -403,7 +410,8 @@ void add_compare_command(CLI::App& app) {
                         parameters.height, ray_sets[2].size());
             std::printf("| builder | kernel | build ms | nodes | refs | SAH | EPO |");
             for (RayKind kind : kKinds)
-                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s boxes/ray |", to_string(kind), to_string(kind), to_string(kind));
+                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s boxes/ray (occl.) |", to_string(kind), to_string(kind),
+                            to_string(kind));
             std::printf(" wrong |\n|---|---|---:|---:|---:|---:|---:|");
             for (int i = 0; i < 3; ++i) std::printf("---:|---:|---:|");
             std::printf("---:|\n");
@@ -439,9 +447,11 @@ void add_compare_command(CLI::App& app) {
                 for (RayKind kind : kKinds) {
                     const KindResult& k = row.kinds[int(kind)];
                     const KindResult& bk = base.kinds[int(kind)];
+                    const std::string boxes = k.nodes_per_ray < 0 ? "-"
+                                              : number_or_dash(k.nodes_per_ray, 1) + " (" +
+                                                    number_or_dash(k.occlusion_nodes_per_ray, 1) + ")";
                     std::printf(" %s | %s | %s |", ratio_text(k.closest_mrays, bk.closest_mrays, 2).c_str(),
-                                ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(),
-                                number_or_dash(k.nodes_per_ray >= 0 ? std::optional(k.nodes_per_ray) : std::nullopt, 1).c_str());
+                                ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(), boxes.c_str());
                     nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays},
                                                 {"occlusion_mrays", k.occlusion_mrays},
                                                 {"closest_ms_runs", k.closest_ms},
@@ -450,6 +460,8 @@ void add_compare_command(CLI::App& app) {
                     if (k.nodes_per_ray >= 0) {
                         json_kind["nodes_per_ray"] = k.nodes_per_ray;
                         json_kind["triangles_per_ray"] = k.triangles_per_ray;
+                        json_kind["occlusion_nodes_per_ray"] = k.occlusion_nodes_per_ray;
+                        json_kind["occlusion_triangles_per_ray"] = k.occlusion_triangles_per_ray;
                     }
                     if (verify) json_kind["wrong"] = k.wrong;
                     json_row[to_string(kind)] = json_kind;

@@ -96,3 +96,28 @@ def test_generated_scene_is_deterministic_and_valid():
     assert all(1 <= i <= len(vertices) for t in triangles for i in t)
     with pytest.raises(ValueError):
         generated_scene("generated:teapot:8")
+
+
+def test_termination_counts_the_cells_where_spatial_tests_fewer_boxes_than_cbvh():
+    from spacebvh.reproduce.experiments import Termination
+    from spacebvh.reproduce.scenes import Scene
+
+    def row(builder, boxes, occlusion_boxes, sah=None):
+        kinds = {k: {"closest_ms_runs": [2.0, 2.0], "occlusion_ms_runs": [1.0, 1.0], "closest_mrays": 1.0,
+                     "occlusion_mrays": 2.0, "wrong": 0} for k in ("random", "primary", "diffuse")}
+        if sah is not None:
+            for k in kinds:
+                kinds[k].update(nodes_per_ray=boxes, occlusion_nodes_per_ray=occlusion_boxes)
+        return {"builder": builder + (" (C_o=1.00)" if sah is not None else ""), "kernel": "bvh8",
+                **({"sah": sah} if sah is not None else {}), **kinds}
+
+    rows = [row("cbvh", 20.0, 8.0, 12.0), row("spatial", 16.0, 10.0, 10.0), row(Termination.SAMPLED, 15.0, 9.0, 10.5),
+            row("binned+opt", 14.0, 6.0, 9.0), row("embree-high", 17.0, 11.0, 11.0), row("embree-high", 0, 0)]
+    record = {"outputs": [{"scenes": [{"rows": rows}]}]}
+    analysis = Termination("termination", "t", "c", "s", "compare", "m").analyse([(Scene("builtin:interior"), record)])
+    # spatial beats cbvh on closest-hit boxes (16 < 20) of every kind, loses on occlusion boxes (10 > 8)
+    assert analysis.verdict == "partly confirmed"
+    assert "3 of 6" in analysis.summary
+    assert analysis.plot["boxes"]["binned+opt"][0]["diffuse"] == (14.0 / 16.0, 6.0 / 10.0)
+    assert "embree-high (Embree kernel)" in analysis.plot["speed"] and "embree-high (Embree kernel)" not in analysis.plot["boxes"]
+    assert len(analysis.table_rows) == 6 and analysis.table_rows[1][3] == "1.000"

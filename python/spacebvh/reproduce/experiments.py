@@ -400,6 +400,60 @@ class BuildQuality(Experiment):
                          "random speed / cbvh", "wrong"], rows, _majority(flags), summary, plot)
 
 
+class Termination(Experiment):
+    """Does space partitioning pay through early ray termination? Child boxes tested per closest-hit and per
+    occlusion ray (an occlusion ray stops at the first hit it finds), and speed, on the same BVH8 kernel."""
+    SAMPLED = "spatial@trays=4096;tsplit=0;topt=4"  # reinsertion priced by sampled first-hit segments
+    BUILDERS = ("cbvh", "spatial", SAMPLED, "binned+opt", "embree-high")
+    EMBREE_KERNEL = "embree-high (Embree kernel)"
+
+    def params(self, scene, triangles, profile):
+        return _compare_params(profile, self.BUILDERS, kernels=("bvh8",), no_epo=True)
+
+    def weight(self, scene, triangles, profile):
+        return 1.0 + triangles / 3000.0
+
+    def analyse(self, jobs):
+        rows, plot, flags = [], {"scenes": [], "boxes": {}, "speed": {}}, []
+        for scene, record in jobs:
+            by = rows_by_label(record["outputs"][0])
+            plot["scenes"].append(scene.label)
+            base = by["spatial"]
+            for label in self.BUILDERS + (self.EMBREE_KERNEL,):
+                row = by[label]
+                speed = {k: {m: speed_ratio(row, base, k, m) for m in ("closest", "occlusion")} for k in RAY_KINDS}
+                plot["speed"].setdefault(label, []).append(speed)
+                boxes = {k: (row[k]["nodes_per_ray"], row[k]["occlusion_nodes_per_ray"]) for k in RAY_KINDS
+                         if "nodes_per_ray" in row[k]}
+                if boxes:
+                    plot["boxes"].setdefault(label, []).append(
+                        {k: (b[0] / base[k]["nodes_per_ray"], b[1] / base[k]["occlusion_nodes_per_ray"])
+                         for k, b in boxes.items()})
+                cells = []
+                for k in RAY_KINDS:
+                    cells += [f"{_fmt(boxes[k][0], 1)} ({_fmt(boxes[k][1], 1)})" if k in boxes else "-",
+                              _ratio_text(speed[k]["closest"]), _ratio_text(speed[k]["occlusion"])]
+                rows.append([scene.label, label, _fmt(row.get("sah")), _fmt(row["sah"] / base["sah"], 3) if "sah" in row
+                             else "-"] + cells + [_wrong(row) if "sah" in row else "-"])
+            cbvh = by["cbvh"]
+            flags += [base[k][q] < cbvh[k][q] for k in RAY_KINDS for q in ("nodes_per_ray", "occlusion_nodes_per_ray")]
+        if not jobs:
+            return Analysis([], [], "no data", "no job finished", plot)
+
+        def diffuse_occlusion(label):
+            return "; ".join(f"{s}: {b['diffuse'][1]:.2f}" for s, b in zip(plot["scenes"], plot["boxes"][label]))
+
+        summary = (f"spatial tests fewer child boxes per ray than cbvh in {sum(flags)} of {len(flags)} (scene, ray kind, "
+                   "closest/occlusion) cells (BVH8 kernel). Child boxes per diffuse occlusion ray relative to spatial: "
+                   f"cbvh {diffuse_occlusion('cbvh')}; spatial with the sampled reinsertion ({self.SAMPLED}) "
+                   f"{diffuse_occlusion(self.SAMPLED)}; binned+opt {diffuse_occlusion('binned+opt')}; Embree HIGH's tree "
+                   f"{diffuse_occlusion('embree-high')}. Confirmed for a cell when spatial tests fewer boxes than cbvh.")
+        columns = ["scene", "tree", "SAH", "SAH / spatial"]
+        for k in RAY_KINDS:
+            columns += [f"{k} boxes/ray (occl.)", f"{k} speed / spatial", f"{k} occl. speed / spatial"]
+        return Analysis(columns + ["wrong"], rows, _majority(flags), summary, plot)
+
+
 class Scaling(Experiment):
     BUILDERS = ("cbvh", "spatial", "sbvh", "full")  # and Embree HIGH's own build (the --embree row)
 
@@ -522,6 +576,14 @@ EXPERIMENTS = [
                  "One `compare` per scene: every builder (full only on scenes within the grid experiment's size limit), "
                  "Embree's MEDIUM/HIGH trees under our kernels and Embree's own LOW/MEDIUM/HIGH builds and kernel; build "
                  "time the median of the build runs, bars their min-max."),
+    Termination("termination", "Early ray termination: boxes per ray of closest-hit and occlusion rays",
+                "\"Hypothesis: SA model needs space partitioning - Intuition: early ray termination\"; future work: "
+                "\"research early termination aware cost function\"",
+                "Result Analysis / Conclusion & Future Work", "compare",
+                "One `compare` per scene under the BVH8 kernel: cbvh, spatial, spatial with a reinsertion pass priced "
+                "by 4096 sampled first-hit segments instead of by area, binned with the SAH reinsertion optimiser, "
+                "Embree HIGH's tree under our kernel and Embree HIGH's own kernel; child boxes tested per ray for "
+                "closest hits and for occlusion (any hit), speed relative to spatial."),
     Scaling("scaling", "Build time against N",
             "\"Choosing G = R N^(1/6) yields O(N^1.5)\"",
             "Practical Considerations", "scaling",

@@ -31,6 +31,8 @@ BUILDER_COLOURS = {
     "grid R=2": "#0b6e78", "grid + splitting*": "#0b6e78",
     "cbvh@lookahead=1": "#e377c2",
     "cbvh@lookahead=2": "#7b2d6b",
+    "spatial@trays=4096;tsplit=0;topt=4": "#ff9896",
+    "binned+opt": "#393b79",
     "embree-low": "#c7c7c7",
     "embree-medium": "#7f7f7f",
     "embree-high": "#222222",
@@ -66,8 +68,10 @@ def _grouped_bars(ax, scenes, series: dict, value, ylabel, title, baseline=1.0):
     for i, name in enumerate(names):
         triples = [value(e) for e in series[name]]
         xs = [j + (i - (len(names) - 1) / 2) * width for j in range(len(triples))]
+        embree_kernel = "(Embree" in name  # Embree's own kernel: its tree's colour, hatched
         ax.bar(xs, [t[0] for t in triples], width, yerr=_errors(triples), capsize=2, color=colour(name),
-               edgecolor="black", linewidth=0.4, label=name)
+               edgecolor="white" if embree_kernel else "black", linewidth=0.4, label=name,
+               hatch="///" if embree_kernel else None)
     ax.axhline(baseline, color="black", linewidth=0.8, linestyle="--")
     ax.set_xticks(range(len(scenes)))
     ax.set_xticklabels([s.replace(" rotated ", "\nrotated ") for s in scenes], rotation=20, ha="right")
@@ -223,6 +227,29 @@ def fig_build_quality(plot, out: Path) -> dict:
     return _save(fig, out, "build_quality")
 
 
+def fig_termination(plot, out: Path) -> dict:
+    """Rows: child boxes per closest-hit ray, per occlusion ray, then closest-hit and occlusion speed, all
+    relative to spatial; columns: the ray kinds."""
+    panels = (("boxes", 0, "closest-hit boxes / spatial"), ("boxes", 1, "occlusion boxes / spatial"),
+              ("speed", "closest", "closest-hit speed / spatial"), ("speed", "occlusion", "occlusion speed / spatial"))
+    fig, axes = plt.subplots(len(panels), 3, figsize=(13, 13), sharex=True)
+    for r, (quantity, which, ylabel) in enumerate(panels):
+        for c, kind in enumerate(("random", "primary", "diffuse")):
+            if quantity == "boxes":
+                series = plot["boxes"]
+                value = (lambda e, k=kind, i=which: (e[k][i],) * 3)
+            else:
+                series = plot["speed"]
+                value = (lambda e, k=kind, m=which: e[k][m])
+            _grouped_bars(axes[r][c], plot["scenes"], series, value, ylabel if c == 0 else "",
+                          f"{kind} rays" if r == 0 else "")
+    axes[0][0].legend(fontsize=7)
+    axes[2][0].legend(fontsize=7)  # the speed rows add Embree's own kernel
+    fig.suptitle("Early ray termination: child boxes tested per ray (BVH8 kernel; lower is better) and speed "
+                 "(higher is better), relative to spatial")
+    return _save(fig, out, "termination")
+
+
 def fig_scaling(plot, out: Path) -> dict:
     fig, ax = plt.subplots(figsize=(7.5, 5))
     for label, series in plot["series"].items():
@@ -270,4 +297,4 @@ def fig_heatmaps(plot, out: Path) -> dict:
 
 FIGURES = {"optimum": fig_optimum, "grid": fig_grid, "lookahead": fig_lookahead, "search_spaces": fig_search_spaces,
            "presplit": fig_presplit, "overlap": fig_overlap, "build_quality": fig_build_quality,
-           "scaling": fig_scaling, "heatmaps": fig_heatmaps}
+           "termination": fig_termination, "scaling": fig_scaling, "heatmaps": fig_heatmaps}
