@@ -5,137 +5,24 @@
 // the first row; and every row's answers checked against Embree with disagreements settled by the
 // exact arbiter (docs/rays.md).
 #include <cstdio>
-#include <functional>
 #include <map>
-#include <sstream>
 
 #include "builder_spec.hpp"
 #include "cli_common.hpp"
+#include "compare_rows.hpp"
+#include "compare_table.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/embree_scene.hpp"
 #include "ray_sets.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
-#include "spacebvh/tools/verify.hpp"
 #include "tree_option.hpp"
 
 namespace spacebvh::cli {
 
 using namespace spacebvh::tools;
+using namespace spacebvh::cli::compare;
 namespace {
-
-constexpr RayKind kKinds[] = {RayKind::random, RayKind::primary, RayKind::diffuse};
-
-struct KindResult {
-    double closest_mrays = 0, occlusion_mrays = 0;
-    // Work per ray of closest-hit and of occlusion queries (an occlusion ray stops at its first hit
-    // found, so the two differ by what early termination saves); -1: not measured (Embree, or --runs 0).
-    double nodes_per_ray = -1, triangles_per_ray = -1;
-    double occlusion_nodes_per_ray = -1, occlusion_triangles_per_ray = -1;
-    size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
-    std::vector<HitRecord> closest, occlusion;
-    std::vector<double> closest_ms, occlusion_ms;  // every timed run, in round-robin order (spread of the median)
-};
-
-struct Row {
-    std::string name;
-    std::string kernel;  // the kernel column: one name, or the per-kind choice of "auto"
-    std::string kernels[3];  // per ray kind
-    double build_ms = 0;
-    std::vector<double> build_ms_runs;
-    std::optional<TreeStats> stats;
-    std::optional<CostModel> cost;
-    KindResult kinds[3];
-    size_t peak_rss_bytes = 0;  // the process's peak resident set when the row was done
-    // Nodes and leaf triangle data of the random rays' tracer (Embree: what its commit allocated) per
-    // triangle of the scene; -1 if not known.
-    double layout_bytes_per_triangle = -1;
-};
-
-// One timed measurement: a row's tracer (ours or Embree's) on one ray kind, closest hits and
-// occlusion. `order`, when not empty, maps its rays back to the kind's ray set (Embree's packets trace
-// the primary rays in 4x4 tiles): answer i belongs to ray order[i].
-struct Measurement {
-    KindResult* result;
-    std::span<const Ray> rays;  // the kind's ray set, or `reordered`
-    std::vector<Ray> reordered;  // its own order of the rays, when it has one (its buffer survives moves)
-    std::vector<uint32_t> order;
-    std::function<void(std::span<const Ray>, std::span<Hit>)> intersect;
-    std::function<void(std::span<const Ray>, std::span<uint8_t>)> occluded;
-};
-
-// Times every measurement `runs` times, round robin: run 1 of every row, then run 2 of every row, and
-// so on, after one warm-up run each (which also keeps the answers). The machines are shared and their
-// speed drifts over seconds; interleaved, a drift slows every row alike instead of the rows measured
-// during it, so the ratios between rows (ours / Embree) stay honest. Mrays/s = ray count / median time.
-// runs == 0 is the answers-only pass of a soak: the one pass that keeps the answers is also the timed
-// one. A measurement's answers become records right after its first pass, so the raw hits of only one
-// measurement are alive at a time (at 10^7 rays a row's answers are what bounds memory).
-void measure_round_robin(std::vector<Measurement>& measurements, int runs, const std::function<void(double)>& progress) {
-    const size_t total = measurements.size() * 2 * size_t(runs + 1);
-    size_t done = 0;
-    std::vector<Hit> hits;
-    std::vector<uint8_t> occluded;
-    for (const bool occlusion : {false, true}) {
-        auto trace = [&](size_t m) {
-            Measurement& measurement = measurements[m];
-            throw_if_interrupted();
-            hits.resize(occlusion ? 0 : measurement.rays.size());
-            occluded.resize(occlusion ? measurement.rays.size() : 0);
-            if (occlusion) measurement.occluded(measurement.rays, occluded);
-            else measurement.intersect(measurement.rays, hits);
-            progress(double(++done) / double(total));
-        };
-        std::vector<std::vector<double>> ms(measurements.size());
-        for (size_t m = 0; m < measurements.size(); ++m) {
-            Measurement& measurement = measurements[m];
-            const auto start = std::chrono::steady_clock::now();
-            trace(m);  // warm-up; its answers are the ones checked
-            if (runs == 0) ms[m].push_back(milliseconds_since(start));
-            KindResult& result = *measurement.result;
-            std::vector<HitRecord>& records = occlusion ? result.occlusion : result.closest;
-            records.resize(measurement.rays.size());
-            for (size_t i = 0; i < measurement.rays.size(); ++i) {
-                const size_t ray = measurement.order.empty() ? i : measurement.order[i];
-                records[ray] = occlusion ? occlusion_record(occluded[i]) : to_record(hits[i]);
-            }
-        }
-        for (int run = 0; run < runs; ++run) {
-            for (size_t m = 0; m < measurements.size(); ++m) {
-                const auto start = std::chrono::steady_clock::now();
-                trace(m);
-                ms[m].push_back(milliseconds_since(start));
-            }
-        }
-        for (size_t m = 0; m < measurements.size(); ++m) {
-            KindResult& result = *measurements[m].result;
-            const double mrays = double(measurements[m].rays.size()) / median(ms[m]) / 1000.0;
-            (occlusion ? result.occlusion_mrays : result.closest_mrays) = mrays;
-            (occlusion ? result.occlusion_ms : result.closest_ms) = ms[m];
-        }
-    }
-}
-
-std::string ratio_text(double value, double reference, int precision) {
-    std::ostringstream text;
-    text.setf(std::ios::fixed);
-    text.precision(precision);
-    text << value;
-    if (reference > 0) {
-        text.precision(2);
-        text << " (" << value / reference << "x)";
-    }
-    return text.str();
-}
-
-std::string number_or_dash(std::optional<double> value, int precision) {
-    if (!value) return "-";
-    std::ostringstream text;
-    text.setf(std::ios::fixed);
-    text.precision(precision);
-    text << *value;
-    return text.str();
-}
 
 // The kernel a --kernel name means for a ray kind: "auto" is the fastest on the benchmark scenes
 // (bench/): coherent packets of 8x8 tiles for primary rays, 8-wide single rays otherwise.
@@ -320,17 +207,7 @@ void add_compare_command(CLI::App& app) {
                         const auto& rays = ray_sets[int(kind)];
                         add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
                                         [tracer](auto r, auto o) { tracer->occluded(r, o); });
-                        if (options->runs == 0) continue;  // answers only: no work-per-ray pass
-                        TraversalStats stats, occlusion_stats;
-                        std::vector<Hit> hits(rays.size());
-                        tracer->intersect(rays, hits, &stats);
-                        std::vector<uint8_t> occluded(rays.size());
-                        tracer->occluded(rays, occluded, &occlusion_stats);
-                        const double n = std::max<double>(1.0, double(rays.size()));
-                        result.nodes_per_ray = double(stats.nodes_visited) / n;
-                        result.triangles_per_ray = double(stats.triangles_tested) / n;
-                        result.occlusion_nodes_per_ray = double(occlusion_stats.nodes_visited) / n;
-                        result.occlusion_triangles_per_ray = double(occlusion_stats.triangles_tested) / n;
+                        if (options->runs > 0) count_work_per_ray(*tracer, rays, result);  // 0: answers only
                     }
                     row.peak_rss_bytes = peak_rss_bytes();
                     row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
@@ -387,95 +264,16 @@ void add_compare_command(CLI::App& app) {
             measure_round_robin(measurements, options->runs,
                                 [&](double within) { progress.update(build_share + (1.0 - build_share) * within); });
 
-            // Correctness: each row against a reference row (the first Embree row for our builders, our
-            // first builder for Embree rows); the arbiter settles every disagreement.
-            const size_t embree_reference = our_rows;
             const bool verify = !options->no_verify && !embree_rows.empty();
-            if (verify) {
-                for (size_t r = 0; r < rows.size(); ++r) {
-                    const size_t reference = r < our_rows ? embree_reference : 0;
-                    for (RayKind kind : kKinds) {
-                        const auto& rays = ray_sets[int(kind)];
-                        KindResult& mine = rows[r].kinds[int(kind)];
-                        const KindResult& theirs = rows[reference].kinds[int(kind)];
-                        mine.wrong = verify_against_reference(scene, rays, mine.closest, theirs.closest, false).ours_wrong +
-                                     verify_against_reference(scene, rays, mine.occlusion, theirs.occlusion, true).ours_wrong;
-                    }
-                }
-            }
+            if (verify) count_wrong_answers(scene, ray_sets, rows, our_rows);
 
             // The table.
             std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(),
                         scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(), parameters.width,
                         parameters.height, ray_sets[2].size());
-            std::printf("| builder | kernel | build ms | nodes | refs | SAH | EPO |");
-            for (RayKind kind : kKinds)
-                std::printf(" %s Mrays/s | %s occl. Mrays/s | %s boxes/ray (occl.) |", to_string(kind), to_string(kind),
-                            to_string(kind));
-            std::printf(" wrong |\n|---|---|---:|---:|---:|---:|---:|");
-            for (int i = 0; i < 3; ++i) std::printf("---:|---:|---:|");
-            std::printf("---:|\n");
-            const Row& base = rows.front();
+            print_table(rows, verify, !options->no_epo);
             nlohmann::json json_rows = nlohmann::json::array();
-            for (const Row& row : rows) {
-                const bool ours = row.stats.has_value();
-                std::printf("| %s | %s | %s | %s | %s | %s | %s |", row.name.c_str(), row.kernel.c_str(),
-                            ratio_text(row.build_ms, base.build_ms, 1).c_str(),
-                            ours ? std::to_string(row.stats->nodes).c_str() : "-",
-                            ours ? std::to_string(row.stats->references).c_str() : "-",
-                            number_or_dash(ours ? std::optional(row.stats->sah) : std::nullopt, 2).c_str(),
-                            number_or_dash(ours && !options->no_epo ? std::optional(row.stats->epo) : std::nullopt, 2).c_str());
-                nlohmann::json json_row = {{"builder", row.name},
-                                           {"kernel", row.kernel},
-                                           {"build_ms", row.build_ms},
-                                           {"build_ms_runs", row.build_ms_runs},
-                                           {"peak_rss_bytes", row.peak_rss_bytes}};
-                if (row.cost) json_row["cost"] = row.cost->describe();
-                // Ours: the layout's exact size; Embree's: what its allocators reserved, which varies
-                // with the thread count, hence another name (not part of a run's deterministic result).
-                if (row.layout_bytes_per_triangle >= 0)
-                    json_row[ours ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
-                if (ours) {
-                    json_row["nodes"] = row.stats->nodes;
-                    json_row["references"] = row.stats->references;
-                    json_row["sah"] = row.stats->sah;
-                    if (!options->no_epo) json_row["epo"] = row.stats->epo;
-                    json_row["bytes"] = row.stats->bytes;
-                    json_row["max_depth"] = row.stats->max_depth;
-                }
-                size_t wrong = 0;
-                for (RayKind kind : kKinds) {
-                    const KindResult& k = row.kinds[int(kind)];
-                    const KindResult& bk = base.kinds[int(kind)];
-                    const std::string boxes = k.nodes_per_ray < 0 ? "-"
-                                              : number_or_dash(k.nodes_per_ray, 1) + " (" +
-                                                    number_or_dash(k.occlusion_nodes_per_ray, 1) + ")";
-                    std::printf(" %s | %s | %s |", ratio_text(k.closest_mrays, bk.closest_mrays, 2).c_str(),
-                                ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(), boxes.c_str());
-                    nlohmann::json json_kind = {{"closest_mrays", k.closest_mrays},
-                                                {"occlusion_mrays", k.occlusion_mrays},
-                                                {"closest_ms_runs", k.closest_ms},
-                                                {"occlusion_ms_runs", k.occlusion_ms}};
-                    if (!row.kernels[int(kind)].empty()) json_kind["kernel"] = row.kernels[int(kind)];
-                    if (k.nodes_per_ray >= 0) {
-                        json_kind["nodes_per_ray"] = k.nodes_per_ray;
-                        json_kind["triangles_per_ray"] = k.triangles_per_ray;
-                        json_kind["occlusion_nodes_per_ray"] = k.occlusion_nodes_per_ray;
-                        json_kind["occlusion_triangles_per_ray"] = k.occlusion_triangles_per_ray;
-                    }
-                    if (verify) json_kind["wrong"] = k.wrong;
-                    json_row[to_string(kind)] = json_kind;
-                    wrong += k.wrong;
-                }
-                std::printf(" %s |\n", verify ? std::to_string(wrong).c_str() : "-");
-                json_rows.push_back(json_row);
-            }
-            std::printf("\nlayout B/tri (nodes + leaf triangles; Embree: its commit's allocations):");
-            for (const Row& row : rows)
-                if (row.layout_bytes_per_triangle >= 0)
-                    std::printf(" %s %s %.1f;", row.name.c_str(), row.kernels[0].empty() ? row.kernel.c_str() : row.kernels[0].c_str(),
-                                row.layout_bytes_per_triangle);
-            std::printf("\n");
+            for (const Row& row : rows) json_rows.push_back(row_json(row, verify, !options->no_epo));
             std::printf("\npeak memory so far: %.1f MiB resident (whole process)\n\n",
                         double(peak_rss_bytes()) / (1024.0 * 1024.0));
             std::fflush(stdout);
