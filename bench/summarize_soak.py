@@ -3,8 +3,9 @@
 the rays checked per kind and the answers the exact arbiter rejects (closest hit + occlusion).
 
 Usage: python3 bench/summarize_soak.py bench/out/soak
-Exits 1 when any row of ours has a wrong answer (Embree's own rows are listed apart: Embree is not
-watertight and is expected to be wrong now and then)."""
+Ends with the coverage: per builder, the (kernel, scene) cells present out of every kernel and scene
+seen in the run, naming the missing ones. Exits 1 when any row of ours has a wrong answer (Embree's
+own rows are listed apart: Embree is not watertight and is expected to be wrong now and then)."""
 import json
 import pathlib
 import sys
@@ -24,6 +25,7 @@ def main() -> int:
     print("| scene | builder | kernel | " + " | ".join(f"{k} rays" for k in KINDS) + " | wrong (ours) |")
     print("|---|---|---|" + "---:|" * (len(KINDS) + 1))
     embree_lines = []
+    cells = {}  # builder -> {(kernel, scene)}: what the run covered
     for path in files:
         report = json.loads(path.read_text())
         for scene in report["scenes"]:
@@ -37,6 +39,7 @@ def main() -> int:
                     embree_lines.append(f"{line} | {wrong} |")
                     continue
                 ours_wrong += wrong
+                cells.setdefault(row["builder"].split(" (C_o=")[0], set()).add((row["kernel"], scene["scene"]))
                 answers += 2 * sum(counts)
                 fewest = min(counts) if fewest is None else min(fewest, min(counts))
                 print(f"{line} | {wrong} |")
@@ -48,6 +51,15 @@ def main() -> int:
         print("Embree HIGH's own rows, checked against our first row (Embree is not watertight):")
         print()
         print("\n".join(sorted(set(embree_lines))))
+    kernels = sorted({k for covered in cells.values() for k, _ in covered})
+    scenes = sorted({s for covered in cells.values() for _, s in covered})
+    print()
+    print(f"Coverage: {len(kernels)} kernels x {len(scenes)} scenes per builder")
+    print()
+    for builder, covered in sorted(cells.items()):
+        missing = [f"{k} on {s}" for k in kernels for s in scenes if (k, s) not in covered]
+        print(f"- {builder}: {len(covered)} of {len(kernels) * len(scenes)}"
+              + (f"; missing: {', '.join(missing)}" if missing else ""))
     return 1 if ours_wrong else 0
 
 
