@@ -56,6 +56,20 @@ int main(int argc, char** argv) {
     // One thread: callgrind counts a thread's work only while trace_rays is on that thread's stack.
     const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     try {
+        // The jobs first, so a malformed one fails before the scene is loaded and built.
+        struct Job {
+            std::vector<Ray> rays;
+            bool occlusion;
+        };
+        std::vector<Job> jobs;
+        for (int i = 5; i < argc; ++i) {
+            const std::string job = argv[i];
+            const size_t colon = job.rfind(':');
+            const std::string query = colon == std::string::npos ? "" : job.substr(colon + 1);
+            if (query != "closest" && query != "occlusion")
+                throw Error("expected RAY_FILE:closest or RAY_FILE:occlusion, got '" + job + "'");
+            jobs.push_back({tools::read_ray_file(job.substr(0, colon)), query == "occlusion"});
+        }
         tools::SceneTransform transform;
         if (std::string(argv[2]) != "-") transform.rotate_degrees = tools::SceneTransform::parse_rotation(argv[2]);
         const tools::Scene scene = tools::load_scene(argv[1], transform);
@@ -69,19 +83,10 @@ int main(int argc, char** argv) {
         }
         // A warm-up pass, not counted: first-call costs (thread pools, lazy setup) and cold caches
         // stay out of the per-ray figures.
-        {
-            const std::string first = argv[5];
-            const std::vector<Ray> rays = tools::read_ray_file(first.substr(0, first.rfind(':')));
-            trace(embree.get(), ours.get(), &rays, false);
-        }
-        for (int i = 5; i < argc; ++i) {
-            const std::string job = argv[i];
-            const size_t colon = job.rfind(':');
-            if (colon == std::string::npos) throw Error("expected RAY_FILE:closest or RAY_FILE:occlusion, got '" + job + "'");
-            const bool occlusion = job.substr(colon + 1) == "occlusion";
-            const std::vector<Ray> rays = tools::read_ray_file(job.substr(0, colon));
-            const size_t hits = trace_rays(embree.get(), ours.get(), &rays, occlusion);
-            std::printf("%zu rays, %zu %s\n", rays.size(), hits, occlusion ? "occluded" : "hit");
+        trace(embree.get(), ours.get(), &jobs.front().rays, false);
+        for (const Job& job : jobs) {
+            const size_t hits = trace_rays(embree.get(), ours.get(), &job.rays, job.occlusion);
+            std::printf("%zu rays, %zu %s\n", job.rays.size(), hits, job.occlusion ? "occluded" : "hit");
         }
         return 0;
     } catch (const std::exception& e) {
