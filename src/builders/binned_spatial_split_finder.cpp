@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 #include "builders/simd_box.hpp"
@@ -211,8 +212,11 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<
     const uint32_t bins = options.bins;
     std::vector<SpatialBinning> binnings;
     for (int axis = 0; axis < 3; ++axis) {
+        // An extent beyond the float range (a node spanning more than FLT_MAX) has no bins: its width
+        // and planes would be infinite, and a bin index from inf * 0 undefined.
         const float extent = node.hi[axis] - node.lo[axis];
-        if (extent > 0.0f) binnings.push_back({axis, node.lo[axis], extent / float(bins), float(bins) / extent, bins});
+        if (extent > 0.0f && std::isfinite(node.lo[axis] + extent))
+            binnings.push_back({axis, node.lo[axis], extent / float(bins), float(bins) / extent, bins});
     }
     if (binnings.empty()) return;
 

@@ -26,7 +26,9 @@ ContainmentGrid::ContainmentGrid(std::span<const Reference> references, const AA
             cells_[axis] = 0;  // flat: the one grid line is the node's plane
             planes = {lo};
         } else {
-            const float width = (hi - lo) / float(cells);
+            // A node spanning more than FLT_MAX: the same width without the overflowing difference.
+            const float extent = hi - lo;
+            const float width = std::isfinite(extent) ? extent / float(cells) : hi / float(cells) - lo / float(cells);
             planes.resize(cells + 1);
             for (uint32_t i = 0; i < cells; ++i) planes[i] = lo + float(i) * width;
             planes[cells] = hi;
@@ -48,11 +50,14 @@ ContainmentGrid::ContainmentGrid(std::span<const Reference> references, const AA
             const std::vector<float>& planes = planes_[axis];
             const uint32_t last = cells_[axis];
             const float scale = last ? float(last) / (planes[last] - planes[0]) : 0.0f;
+            // A first guess of the cell, which the loops settle on the planes; 0 where the position is
+            // NaN (an infinite difference times a zero scale, on a node spanning more than FLT_MAX).
+            const auto guess = [last](float position) { return position >= 0.0f ? uint32_t(std::min(position, float(last))) : 0u; };
             const float x_lo = reference.bounds.lo[axis], x_hi = reference.bounds.hi[axis];
-            uint32_t l = uint32_t(std::clamp((x_lo - planes[0]) * scale, 0.0f, float(last)));
+            uint32_t l = guess((x_lo - planes[0]) * scale);
             while (l > 0 && planes[l] > x_lo) --l;
             while (l < last && planes[l + 1] <= x_lo) ++l;
-            uint32_t h = uint32_t(std::clamp(std::ceil((x_hi - planes[0]) * scale), 0.0f, float(last)));
+            uint32_t h = guess(std::ceil((x_hi - planes[0]) * scale));
             while (h < last && planes[h] < x_hi) ++h;
             while (h > 0 && planes[h - 1] >= x_hi) --h;
             snapped.lo[axis] = uint8_t(l);

@@ -42,7 +42,12 @@ inline constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0
 // An axis along which the ray does not move (d = 0, or a scale or offset not finite) gets scale 0 and
 // offsets +-inf, i.e. NaN or -+inf distances that leave the running bounds unchanged when min/max
 // keep the running bound as their second operand: it never culls (the other axes still do).
-// Tests: Tracer.OrganicMeshFarFromTheOriginIsWatertight fails without the slack.
+// When no axis is left (an origin so far out that o / d overflows on every axis), nothing would keep
+// the ray out of a wide node's unused slots, whose empty boxes only a culling axis rejects: lane 0
+// then gets scale 2^-149 and offsets +-FLT_MAX, so every finite plane gives -FLT_MAX (entry) and
+// FLT_MAX (exit), culling no real box, while an empty box's infinite planes give +inf and -inf.
+// Tests: Tracer.OrganicMeshFarFromTheOriginIsWatertight fails without the slack;
+// Kernels.SceneBeyondTheFloatRangeBuildsAndAnswersExactly without the lane-0 constants.
 struct FusedSlabs {  // lane k: axis k (lane 3 unused)
     __m128 entry_scale, entry_offset, exit_scale, exit_offset;
     unsigned negative;  // bit k: the direction is negative along axis k (the ray enters through the upper plane)
@@ -69,6 +74,14 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
         const __m128 minus_infinity = _mm_sub_ps(_mm_setzero_ps(), infinity);
         exit_offset = _mm_or_ps(_mm_and_ps(finite, _mm_sub_ps(exit_scaled_org, exit_slack)), _mm_andnot_ps(finite, minus_infinity));
         negative = unsigned(_mm_movemask_ps(inv)) & 7u;
+        if ((_mm_movemask_ps(finite) & 7) == 0) [[unlikely]] {
+            const float largest = std::numeric_limits<float>::max();
+            entry_scale = _mm_move_ss(entry_scale, _mm_set_ss(0x1p-149f));
+            exit_scale = _mm_move_ss(exit_scale, _mm_set_ss(0x1p-149f));
+            entry_offset = _mm_move_ss(entry_offset, _mm_set_ss(largest));
+            exit_offset = _mm_move_ss(exit_offset, _mm_set_ss(-largest));
+            negative &= ~1u;  // lane 0 enters through the lower plane
+        }
     }
 
     // |x| 2^-21 + 2^-140: the slack of an offset x.
