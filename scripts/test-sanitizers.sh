@@ -30,7 +30,7 @@ heavy=(ExactSpatialSweep.TreesAreValid Queries.BuiltinScenesMatchTheReference Tr
        Packets.PartlyInactiveAndIncoherent Reinsertion.OptimizesEmbreeTrees Float64Tracer.FeatureRays
        Float64Tracer.TreeEqualsBruteForce Kernels.CallerFlushToZero WideCollapse.SahOptimalPlanBeatsLargestArea
        CityScene.EveryBuilderGivesAValidTree TerminationAwareBuild.ValidCorrectDeterministic
-       TerminationReinsertion. MollerFilter.EveryCertainDecision Cli.BuildWritesConsistentJson
+       TerminationReinsertion. LeafFilters.EveryCertainDecision Cli.BuildWritesConsistentJson
        Cli.SampleRaysAndTerminationRays 'BuilderOnScene\..*_(interior|interior_rotated|organic)( |$)'
        'KernelsOnScene\..*/(interior|interior_rotated|organic)( |$)' TracerWithBuilder.OrganicMeshIsWatertight
        'QuantizedKernels.AnswerAsTheArbiterOn(HugeTinyAndFar|FlatAndScattered)Scenes')

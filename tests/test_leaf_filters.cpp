@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: MIT
-// The moller leaf test's float filter (moller_filter.hpp, docs/leaf-test.md): every decision it
-// calls certain, lane by lane, against the exact arbiter (intersect_triangle_exact), for rays aimed
-// at vertices, at points on edges, into interiors, at grazing angles, from points on the surface,
-// and with tmin / tmax on the hit distance; on the built-in scenes and a shared scene when present.
-// Then the +moller kernels against the watertight kernel on the same rays: identical answers.
+// The float filters of both leaf tests (docs/leaf-test.md): the watertight test's four-wide edge
+// functions (triangle_pack.hpp, pack_edges) and the moller test's edges and distances
+// (moller_filter.hpp). Every decision either calls certain is checked, lane by lane, against the
+// exact arbiter (intersect_triangle_exact), for rays aimed at vertices, at points on edges, into
+// interiors, at grazing angles, from points on the surface, and with tmin / tmax on the hit
+// distance; on the built-in scenes and a shared scene when present. Then the +moller kernels against
+// the watertight kernel on the same rays: identical answers.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,13 +64,16 @@ Triangle lane_triangle(const trace::TrianglePack& pack, int lane) {
 
 struct Tally {
     size_t lanes = 0, certain_edges = 0, certain_within = 0, certain_rejected = 0;
+    size_t watertight_certain = 0;  // lanes the watertight edges called certainly inside or outside
 };
 
-// Checks every certain decision of the filter on `pack` for `ray` (its tmax the running tmax).
+// Checks every certain decision of both filters on `pack` for `ray` (its tmax the running tmax).
 void check_decisions(const trace::TrianglePack& pack, const trace::PackPlanes& planes, const Ray& ray, Tally& tally,
                      const std::string& what) {
     trace::MollerDecision decision;
     trace::moller_pack(pack, planes, trace::MollerRay(ray), ray.tmax, decision);
+    trace::PackEdges edges;
+    trace::pack_edges(pack, trace::PackRay(trace::WatertightRay(ray)), edges);
     Ray line = ray;
     line.tmin = -kInf;
     line.tmax = kInf;
@@ -96,6 +101,16 @@ void check_decisions(const trace::TrianglePack& pack, const trace::PackPlanes& p
             EXPECT_TRUE(hit) << "certain hit, but the arbiter misses";
         }
         EXPECT_FALSE(within && rejected);
+        // The watertight edges decide the line only; the distance is always taken in double.
+        const bool watertight_inside = (edges.inside >> lane) & 1, watertight_outside = (edges.outside >> lane) & 1;
+        tally.watertight_certain += watertight_inside || watertight_outside;
+        if (watertight_inside) {
+            EXPECT_TRUE(crosses_line) << "watertight: certainly inside, but the arbiter's line misses";
+        }
+        if (watertight_outside) {
+            EXPECT_FALSE(crosses_line) << "watertight: certainly outside, but the arbiter's line crosses";
+        }
+        EXPECT_FALSE(watertight_inside && watertight_outside);
     }
 }
 
@@ -183,11 +198,13 @@ void check_scene(const Scene& scene, size_t max_packs, uint64_t seed, bool expec
             if (::testing::Test::HasFailure()) return;
         }
     }
-    std::printf("%s: %zu lanes, edges certain %.4f, hits certain %.4f, rejected %.4f\n", scene.name.c_str(), tally.lanes,
-                double(tally.certain_edges) / tally.lanes, double(tally.certain_within) / tally.lanes,
-                double(tally.certain_rejected) / tally.lanes);
-    // Not vacuous: most lanes are decided by the filter.
+    std::printf("%s: %zu lanes; moller: edges certain %.4f, hits certain %.4f, rejected %.4f; watertight: edges certain %.4f\n",
+                scene.name.c_str(), tally.lanes, double(tally.certain_edges) / tally.lanes,
+                double(tally.certain_within) / tally.lanes, double(tally.certain_rejected) / tally.lanes,
+                double(tally.watertight_certain) / tally.lanes);
+    // Not vacuous: most lanes are decided by the filters.
     if (expect_decisions) {
+        EXPECT_GT(tally.watertight_certain, tally.lanes / 2) << scene.name;
         EXPECT_GT(tally.certain_edges, tally.lanes / 2) << scene.name;
         EXPECT_GT(tally.certain_within, 0u) << scene.name;
         EXPECT_GT(tally.certain_rejected, tally.lanes / 4) << scene.name;
@@ -214,7 +231,7 @@ void check_scene(const Scene& scene, size_t max_packs, uint64_t seed, bool expec
 
 }  // namespace
 
-TEST(MollerFilter, EveryCertainDecisionMatchesTheArbiterOnBuiltinScenes) {
+TEST(LeafFilters, EveryCertainDecisionMatchesTheArbiterOnBuiltinScenes) {
     uint64_t seed = 1;
     for (const std::string& name : builtin_scene_names()) {
         SCOPED_TRACE(name);
@@ -222,7 +239,7 @@ TEST(MollerFilter, EveryCertainDecisionMatchesTheArbiterOnBuiltinScenes) {
     }
 }
 
-TEST(MollerFilter, EveryCertainDecisionMatchesTheArbiterOnASharedScene) {
+TEST(LeafFilters, EveryCertainDecisionMatchesTheArbiterOnASharedScene) {
     const std::string path = std::string(SPACEBVH_SHARED_DIR) + "/scenes/sibenik/sibenik.obj";
     if (!std::filesystem::exists(path)) GTEST_SKIP() << "no shared scene at " << path;
     SceneTransform rotated;
@@ -232,7 +249,7 @@ TEST(MollerFilter, EveryCertainDecisionMatchesTheArbiterOnASharedScene) {
 }
 
 // A scene far from the origin and one of tiny coordinates (subnormal products): still exact.
-TEST(MollerFilter, FarAndTinyScenesMatchTheArbiter) {
+TEST(LeafFilters, FarAndTinyScenesMatchTheArbiter) {
     const Scene& soup = testing_support::cached_builtin_scene("soup");
     // 1e-17: products of edge components near 1e-36, where float products reach the subnormal range.
     for (float scale : {1e-17f, 1e6f}) {
