@@ -85,11 +85,15 @@ struct SlabRay {
         constexpr int kAxisLanes = _MM_SHUFFLE(kAxis, kAxis, kAxis, kAxis);
         scale[kAxis] = _mm_shuffle_ps(slabs.entry_scale, slabs.exit_scale, kAxisLanes);
         offset[kAxis] = _mm_shuffle_ps(slabs.entry_offset, slabs.exit_offset, kAxisLanes);
+        // The entry plane follows the sign of the fused scale, which differs from the direction's
+        // where no axis has finite constants (FusedSlabs).
+        const bool negative_direction = (slabs.negative >> kAxis) & 1;
 #else
+        (void)slabs;
         org[kAxis] = _mm_set1_ps(ray.org[kAxis]);
         inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);  // +-inf for axis-parallel rays
+        const bool negative_direction = std::signbit(ray.dir[kAxis]);  // the sign of inv_dir, -0 included
 #endif
-        const bool negative_direction = (slabs.negative >> kAxis) & 1;
 #ifdef __AVX__
         plane_order[kAxis] = negative_direction ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
 #else
