@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The reinsertion optimiser (--optimize, src/builders/reinsertion_optimizer.hpp) on the shared scenes and
+# The reinsertion optimiser (--optimize, src/builders/optimize/reinsertion_optimizer.hpp) on the shared scenes and
 # crytek_sponza rotated 45/45/45: binned, binned+opt, cbvh+opt, spatial and spatial+opt under the BVH8
 # kernel, next to Embree HIGH's own single-ray kernel (rtcIntersect1 / rtcOccluded1), all on the same
 # rays in one run per scene, 2 threads, medians of 5 runs (builds: median of 3; build ms includes the

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "builder_spec.hpp"
-#include "io/tree_file_checksum.hpp"
+#include "tree_file/tree_file_checksum.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/trace.hpp"

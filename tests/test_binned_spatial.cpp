@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The binned spatial search space (src/builders/binned_spatial_split_finder.hpp): its bins against the
+// The binned spatial search space (src/builders/search_spaces/binned_spatial_split_finder.hpp): its bins against the
 // exact clipping of apply_split, and when its search is skipped (the budget and alpha gates).
 #include <gtest/gtest.h>
 
@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "builders/binned_spatial_split_finder.hpp"
-#include "builders/object_sweep_split_finder.hpp"
-#include "builders/partition.hpp"
-#include "builders/spatial_split.hpp"
+#include "builders/search_spaces/binned_spatial_split_finder.hpp"
+#include "builders/search_spaces/object_sweep_split_finder.hpp"
+#include "builders/driver/partition.hpp"
+#include "builders/search_spaces/spatial_split.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"

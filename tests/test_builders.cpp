@@ -197,7 +197,7 @@ INSTANTIATE_TEST_SUITE_P(Builtin, BuilderOnScene,
                                             ::testing::ValuesIn(builtin_scene_names())),
                          builder_scene_name);
 
-// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp) on the classical builder everywhere,
+// The reinsertion optimiser (src/builders/optimize/reinsertion_optimizer.hpp) on the classical builder everywhere,
 // and on spatial-split trees (leaves holding clipped references) where splits matter most.
 INSTANTIATE_TEST_SUITE_P(Optimized, BuilderOnScene,
                          ::testing::Values(std::make_tuple("binned+opt", "interior"),

@@ -9,7 +9,7 @@
 #include <cstring>
 #include <limits>
 
-#include "builders/simd_box.hpp"
+#include "builders/driver/simd_box.hpp"
 #include "spacebvh/cost_model.hpp"
 #include "spacebvh/error.hpp"
 
@@ -235,7 +235,7 @@ TEST(CostModel, LeafBlocksRoundReferenceCountsUp) {
     }
 }
 
-// The object sweep prices cuts from SimdBox registers (src/builders/simd_box.hpp): its extend, area and
+// The object sweep prices cuts from SimdBox registers (src/builders/driver/simd_box.hpp): its extend, area and
 // overlap fraction must give the AABB forms' results bit for bit, or the sweep would build other
 // trees. Random boxes, partly on a coarse grid (so that touching, flat and equal coordinates, and -0
 // against +0, occur), partly with full mantissas (so that rounding order shows), some empty.

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The exhaustive optimum (src/builders/exhaustive_split.hpp): equal to a naive enumeration, and never
+// The exhaustive optimum (src/builders/search_spaces/exhaustive_split.hpp): equal to a naive enumeration, and never
 // beaten by an object-partitioning search space (object sweep, binned object, grid without
 // splitting) under the same cost model, for plain SAH, a finite overlap penalty and C_o = inf.
 #include <gtest/gtest.h>
@@ -8,10 +8,10 @@
 #include <random>
 #include <vector>
 
-#include "builders/binned_object_split_finder.hpp"
-#include "builders/exhaustive_split.hpp"
-#include "builders/grid_split_finder.hpp"
-#include "builders/object_sweep_split_finder.hpp"
+#include "builders/search_spaces/binned_object_split_finder.hpp"
+#include "builders/search_spaces/exhaustive_split.hpp"
+#include "builders/search_spaces/grid_split_finder.hpp"
+#include "builders/search_spaces/object_sweep_split_finder.hpp"
 #include "spacebvh/error.hpp"
 #include "test_support.hpp"
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The grid search space (src/builders/grid_split_finder.hpp): its containment counts and its best
+// The grid search space (src/builders/search_spaces/grid_split_finder.hpp): its containment counts and its best
 // configuration against brute force on every configuration of random small nodes, its relation to
 // the object sweep and the kd (spatial) planes where its search space contains theirs, and the
 // composable search spaces (--search) and `full` preset.
@@ -9,10 +9,10 @@
 #include <random>
 #include <vector>
 
-#include "builders/binned_spatial_split_finder.hpp"
-#include "builders/grid_split_finder.hpp"
-#include "builders/object_sweep_split_finder.hpp"
-#include "builders/partition.hpp"
+#include "builders/search_spaces/binned_spatial_split_finder.hpp"
+#include "builders/search_spaces/grid_split_finder.hpp"
+#include "builders/search_spaces/object_sweep_split_finder.hpp"
+#include "builders/driver/partition.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"

@@ -27,9 +27,9 @@
 #include "spacebvh/tools/verify.hpp"
 #include "spacebvh/trace.hpp"
 #include "test_support.hpp"
-#include "trace/traversal_common.hpp"
-#include "trace/triangle_pack.hpp"
-#include "trace/visit_order.hpp"
+#include "trace/traversal/traversal_common.hpp"
+#include "trace/leaf_tests/triangle_pack.hpp"
+#include "trace/traversal/visit_order.hpp"
 
 using namespace spacebvh;
 using namespace spacebvh::tools;
@@ -522,7 +522,7 @@ TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
 }
 
 // The single-ray kernels order three or more entered children by sorting integer visit keys
-// (trace/visit_order.hpp): the order must be visits_after's, nearest first and, at equal distances,
+// (trace/traversal/visit_order.hpp): the order must be visits_after's, nearest first and, at equal distances,
 // the later slot first (-0 just before +0), for every count the 4- and 8-wide nodes produce.
 template <int W>
 void check_visit_key_order(std::mt19937& random) {

@@ -24,7 +24,7 @@
 #include "spacebvh/tools/scene.hpp"
 #include "spacebvh/trace.hpp"
 #include "test_support.hpp"
-#include "trace/moller_filter.hpp"
+#include "trace/leaf_tests/moller_filter.hpp"
 
 using namespace spacebvh;
 using namespace spacebvh::tools;

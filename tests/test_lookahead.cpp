@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Recursive cost evaluation (src/builders/lookahead.hpp) and what it rests on: the search spaces'
+// Recursive cost evaluation (src/builders/driver/lookahead.hpp) and what it rests on: the search spaces'
 // candidate lists (SplitFinder::find_candidates), the candidates of all search spaces
 // (SplitSearch::candidates), the pricing of a candidate's subtree, and cancellation of a build.
 #include <gtest/gtest.h>
@@ -12,13 +12,13 @@
 #include <random>
 #include <vector>
 
-#include "builders/binned_object_split_finder.hpp"
-#include "builders/binned_spatial_split_finder.hpp"
-#include "builders/lookahead.hpp"
-#include "builders/object_sweep_split_finder.hpp"
-#include "builders/partition.hpp"
-#include "builders/split_search.hpp"
-#include "builders/top_down_builder.hpp"
+#include "builders/search_spaces/binned_object_split_finder.hpp"
+#include "builders/search_spaces/binned_spatial_split_finder.hpp"
+#include "builders/driver/lookahead.hpp"
+#include "builders/search_spaces/object_sweep_split_finder.hpp"
+#include "builders/driver/partition.hpp"
+#include "builders/driver/split_search.hpp"
+#include "builders/driver/top_down_builder.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Pre-splitting passes (src/builders/presplit.hpp): early split clipping (Ernst & Greiner 2007) and the
+// Pre-splitting passes (src/builders/presplit/presplit.hpp): early split clipping (Ernst & Greiner 2007) and the
 // edge volume heuristic (Dammertz & Keller 2008). Budget, one reference per triangle at least,
 // containment, coverage (random barycentric samples), splitting of long thin triangles, determinism
 // across thread counts, and trees built over the references answering like the exact arbiter.
@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "builders/object_sweep_split_finder.hpp"
-#include "builders/presplit.hpp"
-#include "builders/top_down_builder.hpp"
+#include "builders/search_spaces/object_sweep_split_finder.hpp"
+#include "builders/presplit/presplit.hpp"
+#include "builders/driver/top_down_builder.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/scene.hpp"
 #include "spacebvh/trace.hpp"

@@ -22,8 +22,8 @@
 #include "spacebvh/tools/verify.hpp"
 #include "spacebvh/trace.hpp"
 #include "test_support.hpp"
-#include "trace/quantized_layout.hpp"
-#include "trace/traversal_common.hpp"
+#include "trace/layout/quantized_layout.hpp"
+#include "trace/traversal/traversal_common.hpp"
 
 using namespace spacebvh;
 using namespace spacebvh::tools;

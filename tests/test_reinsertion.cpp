@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The reinsertion optimiser (src/builders/reinsertion_optimizer.hpp, ReinsertionConfig::iterations,
+// The reinsertion optimiser (src/builders/optimize/reinsertion_optimizer.hpp, ReinsertionConfig::iterations,
 // optimize): the tree SAH never rises and falls where there is something to gain, the gains are
 // priced exactly, the trees stay valid (depth cap included) and answer like the arbiter, the result
 // does not depend on the thread count, and bad options, tiny trees and cancellation are handled.
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "builders/reinsertion_optimizer.hpp"
+#include "builders/optimize/reinsertion_optimizer.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/embree_builder.hpp"
 #include "spacebvh/build.hpp"

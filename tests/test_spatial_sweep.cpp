@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The exact sweep-plane spatial search space (src/builders/spatial_sweep_split_finder.hpp) against brute
+// The exact sweep-plane spatial search space (src/builders/search_spaces/spatial_sweep_split_finder.hpp) against brute
 // force, its clipping edge cases, and the partition rule for straddlers when the budget is spent.
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include <random>
 #include <vector>
 
-#include "builders/partition.hpp"
-#include "builders/spatial_split.hpp"
-#include "builders/spatial_sweep_split_finder.hpp"
+#include "builders/driver/partition.hpp"
+#include "builders/search_spaces/spatial_split.hpp"
+#include "builders/search_spaces/spatial_sweep_split_finder.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"

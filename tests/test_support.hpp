@@ -20,7 +20,7 @@
 #include <string_view>
 #include <vector>
 
-#include "builders/reference.hpp"
+#include "builders/driver/reference.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/clip.hpp"

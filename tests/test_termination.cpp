@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "builders/reinsertion_optimizer.hpp"
-#include "builders/termination_term.hpp"
+#include "builders/optimize/reinsertion_optimizer.hpp"
+#include "builders/driver/termination_term.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/presets.hpp"

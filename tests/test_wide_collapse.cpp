@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The collapse of binary trees into wide nodes (src/trace/wide_collapse.hpp): the SAH-optimal plan
+// The collapse of binary trees into wide nodes (src/trace/layout/wide_collapse.hpp): the SAH-optimal plan
 // against an exhaustive search over every way to cut small trees, against Embree's largest-area rule
 // on the built-in scenes, the plan's coverage (every triangle of the tree in some reachable leaf), and
 // the layout's slot order (wide_layout.cpp: decreasing subtree size, empty slots last).
@@ -14,8 +14,8 @@
 #include "spacebvh/presets.hpp"
 #include "spacebvh/build.hpp"
 #include "test_support.hpp"
-#include "trace/wide_collapse.hpp"
-#include "trace/wide_layout.hpp"
+#include "trace/layout/wide_collapse.hpp"
+#include "trace/layout/wide_layout.hpp"
 
 using namespace spacebvh;
 using namespace spacebvh::tools;

@@ -1,15 +1,14 @@
 // SPDX-License-Identifier: MIT
 // spacebvh optimum [SCENE]: how far each search space's best local split is from the exhaustive
-// optimum (all 2^N partitions; src/builders/exhaustive_split.hpp) on random small nodes and on small
+// optimum (all 2^N partitions; spacebvh/split_optimum.hpp) on random small nodes and on small
 // nodes sampled from a scene's cbvh tree. The slides' example: CBVH ~700 against the optimum ~100.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 
-#include "builders/exhaustive_split.hpp"
-#include "builders/search_spaces.hpp"
 #include "cli_common.hpp"
+#include "spacebvh/split_optimum.hpp"
 
 namespace spacebvh::cli {
 
@@ -92,32 +91,22 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
     double optimum_sum = 0, leaf_sum = 0;
     size_t feasible = 0;
     for (const TriangleSet& set : sets) {
-        std::vector<builders::Reference> references;
-        for (uint32_t i = 0; i < set.size(); ++i) references.push_back({set[i].bounds(), i});
-        const builders::ReferenceSummary summary = builders::summarize(references);
-        const builders::ExhaustiveSplit optimum = builders::exhaustive_split(references, summary.bounds, base.cost);
-        if (!(optimum.cost < kInfinity)) continue;
+        const float optimum = exhaustive_split_cost(set, base.cost);
+        if (!(optimum < kInfinity)) continue;
         ++feasible;
-        optimum_sum += optimum.cost;
+        optimum_sum += optimum;
         leaf_sum += base.cost.leaf_cost(set.size());
         for (Row& row : rows) {
             BuildConfig options = base;
             options.grid.splitting = row.grid_splitting;
-            const auto finders = builders::make_search_spaces(row.search_spaces, set, options, false, 0.0f);
-            builders::Split best;
-            for (const auto& finder : finders) {
-                // Splitting search spaces get room for every reference to be clipped once.
-                const builders::NodeContext context{references, summary, 2 * references.size(), summary.bounds.area(), best};
-                const builders::Split split = finder->find(context, base.cost);
-                if (split.cost < best.cost) best = split;
-            }
-            if (!(best.cost < kInfinity)) {
+            const float best = best_local_split_cost(set, row.search_spaces, options);
+            if (!(best < kInfinity)) {
                 ++row.infeasible;
                 continue;
             }
-            const double ratio = double(best.cost) / double(optimum.cost);
+            const double ratio = double(best) / double(optimum);
             row.ratios.push_back(ratio);
-            row.cost_sum += best.cost;
+            row.cost_sum += best;
             row.at_optimum += std::fabs(ratio - 1.0) <= 1e-6;
             row.below_optimum += ratio < 1.0 - 1e-6;
         }
@@ -164,7 +153,7 @@ void add_optimum_command(CLI::App& app) {
     command->add_option("--nodes", options->nodes, "nodes per set")->capture_default_str();
     command->add_option("--min-refs", options->min_size, "smallest node")->capture_default_str();
     command->add_option("--max-refs", options->max_size,
-                        "largest node (at most " + std::to_string(builders::kMaxExhaustiveReferences) + ")")
+                        "largest node (at most " + std::to_string(kMaxExhaustiveTriangles) + ")")
         ->capture_default_str();
     command->add_option("--seed", options->seed, "seed of the random nodes")->capture_default_str();
     options->scene.add_to(*command);
@@ -173,9 +162,9 @@ void add_optimum_command(CLI::App& app) {
     command->callback([options] {
         const auto limit = options->common.thread_limit();
         if (options->min_size < 2 || options->max_size < options->min_size ||
-            options->max_size > builders::kMaxExhaustiveReferences)
+            options->max_size > kMaxExhaustiveTriangles)
             throw Error("--min-refs and --max-refs must satisfy 2 <= min <= max <= " +
-                        std::to_string(builders::kMaxExhaustiveReferences));
+                        std::to_string(kMaxExhaustiveTriangles));
         const BuildConfig base = options->build.options("cbvh");
         std::printf("Best local split cost of each search space / the exhaustive optimum over all partitions\n");
         std::printf("(x = ratio; * = clips references, so it may go below the partition optimum; grid G = ceil(%g N^(1/6)) <= %u)\n",

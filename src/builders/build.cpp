@@ -3,10 +3,10 @@
 // generic top-down driver, then the optional reinsertion optimisation.
 #include "builders/memory_estimate.hpp"
 #include "builders/preset_table.hpp"
-#include "builders/presplit.hpp"
-#include "builders/reinsertion_optimizer.hpp"
-#include "builders/search_spaces.hpp"
-#include "builders/top_down_builder.hpp"
+#include "builders/presplit/presplit.hpp"
+#include "builders/optimize/reinsertion_optimizer.hpp"
+#include "builders/search_spaces/search_spaces.hpp"
+#include "builders/driver/top_down_builder.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 

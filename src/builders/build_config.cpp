@@ -2,8 +2,8 @@
 // BuildConfig: the presets' defaults, the quality levels, and the range of every setting.
 #include <string>
 
-#include "builders/binned_object_split_finder.hpp"
-#include "builders/grid_split_finder.hpp"
+#include "builders/search_spaces/binned_object_split_finder.hpp"
+#include "builders/search_spaces/grid_split_finder.hpp"
 #include "builders/preset_table.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"

@@ -18,9 +18,9 @@
 #include <sstream>
 
 #include "builders/preset_table.hpp"
-#include "builders/reference.hpp"
-#include "builders/search_spaces.hpp"
-#include "builders/top_down_builder.hpp"
+#include "builders/driver/reference.hpp"
+#include "builders/search_spaces/search_spaces.hpp"
+#include "builders/driver/top_down_builder.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh {

@@ -20,11 +20,11 @@
 
 #include "spacebvh/error.hpp"
 #include "spacebvh/trace.hpp"
-#include "trace/perturbed_triangle.hpp"
-#include "trace/traversal_common.hpp"
-#include "trace/triangle_pack.hpp"
-#include "trace/wide_layout.hpp"
-#include "trace/watertight_triangle.hpp"
+#include "trace/leaf_tests/perturbed_triangle.hpp"
+#include "trace/traversal/traversal_common.hpp"
+#include "trace/leaf_tests/triangle_pack.hpp"
+#include "trace/layout/wide_layout.hpp"
+#include "trace/leaf_tests/watertight_triangle.hpp"
 
 namespace spacebvh {
 

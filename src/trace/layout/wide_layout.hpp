@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: MIT
+// The memory layout of wide BVHs (wide_tracer.hpp) and the collapse of a binary Bvh into it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <span>
+
+#include "spacebvh/bvh.hpp"
+#include "spacebvh/geometry.hpp"
+#include "trace/layout/huge_page_allocator.hpp"
+#include "spacebvh/trace.hpp"
+#include "trace/leaf_tests/moller_filter.hpp"
+#include "trace/leaf_tests/triangle_pack.hpp"
+
+namespace spacebvh::trace {
+
+// One node: the boxes of its (up to) W children in SoA, so one SIMD load reads one plane of all
+// children. planes[2 * axis] holds the lower bounds on `axis`, planes[2 * axis + 1] the upper ones.
+// Unused slots hold empty boxes (lo = +inf, hi = -inf), which no ray enters; they come last, the others
+// in decreasing order of the triangles under them (the any-hit order, wide_layout.cpp).
+// child[i]: inner child (count[i] == 0): index of its WideNode; leaf (count[i] > 0): index of its
+// first TrianglePack (triangle_pack.hpp); it is tested as count[i] lanes from there (LeafPacker).
+template <int W>
+struct alignas(64) WideNode {
+    float planes[6][W];
+    uint32_t child[W];
+    uint32_t count[W];
+
+    // Whether slot holds a child (unused slots hold empty boxes).
+    [[gnu::always_inline]] bool used(int slot) const { return planes[0][slot] <= planes[1][slot]; }
+};
+static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256);
+
+template <int W>
+struct WideLayout {
+    std::vector<WideNode<W>, HugePageAllocator<WideNode<W>>> nodes;  // nodes[0] is the root
+    TrianglePacks packs;
+    PackPlanesList planes;  // the moller leaf test's normals, planes[i] for packs[i]; empty without it
+};
+
+// Collapses the binary tree into wide nodes, choosing each node's children by `collapse`
+// (wide_collapse.hpp). Nodes are laid out depth first, a node's first inner child right after it.
+// Degenerate triangles are dropped (never hit); a leaf of degenerate triangles only gets an empty box.
+template <int W>
+WideLayout<W> collapse_to_wide(std::span<const Triangle> triangles, const Bvh& bvh, WideCollapse collapse);
+
+extern template WideLayout<4> collapse_to_wide<4>(std::span<const Triangle>, const Bvh&, WideCollapse);
+extern template WideLayout<8> collapse_to_wide<8>(std::span<const Triangle>, const Bvh&, WideCollapse);
+
+}  // namespace spacebvh::trace
