@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The binary BVH every builder produces: nodes in depth-first order and the leaves' triangle ids.
+// Header-only.
 #pragma once
 
 #include <cstdint>

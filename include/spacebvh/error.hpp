@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The one exception type of the library: every bad input (file, parameter, scene) is reported as an
 // Error whose message says what is wrong and where (file and line or element).
+// Header-only.
 #pragma once
 
 #include <stdexcept>

@@ -3,6 +3,7 @@
 // triangles, exact edge and range decisions in float64; docs/float64.md). The tree is built by the
 // ordinary builders over float32 triangles in a local frame centred on the mesh, its boxes then
 // widened to contain the float64 triangles.
+// Implemented in src/trace/float64.cpp, on the exact float64 predicates of src/core/exact_float64.cpp.
 #pragma once
 
 #include <array>
@@ -38,8 +39,8 @@ struct Ray64 {
 
 struct Hit64 {
     double t = std::numeric_limits<double>::infinity();  // +inf for a miss
-    uint32_t primitive = kInvalidIndex;                    // triangle id in mesh order
-    double u = 0.0, v = 0.0;                               // barycentrics of v1 and v2
+    uint32_t primitive = kInvalidIndex;                  // triangle id in mesh order
+    double u = 0.0, v = 0.0;                             // barycentrics of v1 and v2
 
     bool is_hit() const { return primitive != kInvalidIndex; }
 };

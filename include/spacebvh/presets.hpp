@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // The names of builders, search spaces and kernels, for the command line and Python. C++ callers
 // use the typed Preset, BuildConfig, Kernel and TracerConfig instead.
+// Implemented beside what the names name: src/builders/builder_names.cpp and src/trace/kernel_names.cpp.
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // spacebvh: BVHs by space subdivision (Popov, Georgiev, Dimov, Slusallek 2009) with exact traversal.
 // The core API: a mesh view, a build configuration (or a quality level), the tree, and a tracer.
+// Header-only: it includes the core API headers.
 #pragma once
 
 #include "spacebvh/build.hpp"

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Quality metrics of a tree: structure, memory, tree SAH and EPO (Aila, Karras, Laine 2013).
+// Implemented in src/tools/metrics/tree_metrics.cpp.
 #pragma once
 
 #include <cstddef>

@@ -2,6 +2,7 @@
 // Ray sets and result files exactly as docs/rays.md, so that outside tools can check our
 // answers ray by ray. The generators are compiled with -ffp-contract=off (no fused multiply-add) to
 // reproduce the spec's rays bit for bit.
+// Implemented in src/tools/rays/ray_generation.cpp (ray sets) and src/tools/rays/ray_files.cpp (files).
 #pragma once
 
 #include <cstdint>
@@ -25,7 +26,7 @@ class SplitMix64 {
 public:
     explicit SplitMix64(uint64_t seed) : state_(seed) {}
     uint64_t next();
-    float uniform();                        // [0, 1), exact in float32
+    float uniform();                          // [0, 1), exact in float32
     void disk(float& a, float& b, float& s);  // rejection sample of the unit disk, s = a*a + b*b < 1
 private:
     uint64_t state_;
