@@ -25,17 +25,22 @@
 
 using namespace spacebvh;
 
-static size_t trace(const tools::EmbreeScene* embree, const Tracer* ours, const std::vector<Ray>* rays, bool occlusion) {
+static size_t trace(const tools::EmbreeScene* embree, const Tracer* ours, const std::vector<Ray>* rays,
+                    bool occlusion) {
     size_t hits = 0;
     if (occlusion) {
         std::vector<uint8_t> blocked(rays->size());
-        if (embree) embree->occluded(*rays, blocked);
-        else ours->occluded(*rays, blocked);
+        if (embree)
+            embree->occluded(*rays, blocked);
+        else
+            ours->occluded(*rays, blocked);
         for (uint8_t b : blocked) hits += b != 0;
     } else {
         std::vector<Hit> closest(rays->size());
-        if (embree) embree->intersect(*rays, closest);
-        else ours->intersect(*rays, closest);
+        if (embree)
+            embree->intersect(*rays, closest);
+        else
+            ours->intersect(*rays, closest);
         for (const Hit& h : closest) hits += h.is_hit();
     }
     return hits;
@@ -50,7 +55,8 @@ extern "C" __attribute__((noinline)) size_t trace_rays(const tools::EmbreeScene*
 
 int main(int argc, char** argv) {
     if (argc < 6) {
-        std::fprintf(stderr, "usage: %s SCENE ROTATION|- TREE_FILE|embree KERNEL RAY_FILE:closest|occlusion...\n", argv[0]);
+        std::fprintf(stderr, "usage: %s SCENE ROTATION|- TREE_FILE|embree KERNEL RAY_FILE:closest|occlusion...\n",
+                     argv[0]);
         return 2;
     }
     // One thread: callgrind counts a thread's work only while trace_rays is on that thread's stack.

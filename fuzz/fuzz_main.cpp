@@ -11,7 +11,6 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try {
         spacebvh::fuzz::feed(SPACEBVH_FUZZ_TARGET, {data, size});
-    } catch (const spacebvh::Error&) {
-    }
+    } catch (const spacebvh::Error&) {}
     return 0;
 }

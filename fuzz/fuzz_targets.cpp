@@ -50,7 +50,8 @@ void trace_all(const Bvh& bvh) {
     // quantized nodes (whose encoder must cope with whatever boxes a file holds).
     TracerConfig quantized{Kernel::bvh8};
     quantized.node_format = NodeFormat::quantized;
-    for (const TracerConfig& config : {TracerConfig{Kernel::automatic}, TracerConfig{Kernel::binary}, TracerConfig{Kernel::packet8}, quantized}) {
+    for (const TracerConfig& config :
+         {TracerConfig{Kernel::automatic}, TracerConfig{Kernel::binary}, TracerConfig{Kernel::packet8}, quantized}) {
         const Tracer tracer(mesh, bvh, config);
         std::vector<Hit> hits(rays.size());
         tracer.intersect(rays, hits);
@@ -99,14 +100,22 @@ const std::vector<std::string>& target_names() {
 
 void feed(std::string_view target, std::span<const uint8_t> bytes) {
     using namespace tools::scene_detail;
-    if (target == "obj") parse_obj(as_text(bytes), "fuzz.obj");
-    else if (target == "ply") parse_ply(as_text(bytes), "fuzz.ply");
-    else if (target == "gltf") parse_gltf(as_text(bytes), "fuzz.gltf");
-    else if (target == "ray_file") tools::read_ray_file(memory_stream(bytes), "fuzz.rays");
-    else if (target == "hit_file") tools::read_hit_file(memory_stream(bytes), "fuzz.hits");
-    else if (target == "tree_file") feed_tree_file(bytes);
-    else if (target == "builder_spec") feed_builder_spec(bytes);
-    else throw std::invalid_argument("fuzz: unknown target '" + std::string(target) + "'");
+    if (target == "obj")
+        parse_obj(as_text(bytes), "fuzz.obj");
+    else if (target == "ply")
+        parse_ply(as_text(bytes), "fuzz.ply");
+    else if (target == "gltf")
+        parse_gltf(as_text(bytes), "fuzz.gltf");
+    else if (target == "ray_file")
+        tools::read_ray_file(memory_stream(bytes), "fuzz.rays");
+    else if (target == "hit_file")
+        tools::read_hit_file(memory_stream(bytes), "fuzz.hits");
+    else if (target == "tree_file")
+        feed_tree_file(bytes);
+    else if (target == "builder_spec")
+        feed_builder_spec(bytes);
+    else
+        throw std::invalid_argument("fuzz: unknown target '" + std::string(target) + "'");
 }
 
 const std::vector<Triangle>& fuzz_geometry() {

@@ -60,9 +60,12 @@ std::string obj_text(const IndexedMesh& mesh, bool fancy) {
         out << 'f';
         for (int c = 0; c < 3; ++c) {
             const uint32_t i = mesh.indices[t + c];
-            if (!fancy) out << ' ' << i + 1;
-            else if (t % 2 == 0) out << ' ' << i + 1 << "/1/1";
-            else out << ' ' << int64_t(i) - int64_t(mesh.vertices.size()) << "//1";
+            if (!fancy)
+                out << ' ' << i + 1;
+            else if (t % 2 == 0)
+                out << ' ' << i + 1 << "/1/1";
+            else
+                out << ' ' << int64_t(i) - int64_t(mesh.vertices.size()) << "//1";
         }
         out << '\n';
     }
@@ -81,8 +84,9 @@ void put_binary(std::string& out, T value, bool big) {
 }
 
 std::string ply_bytes(const IndexedMesh& mesh, PlyEncoding encoding, bool extras) {
-    const char* format = encoding == PlyEncoding::ascii ? "ascii" : encoding == PlyEncoding::little ? "binary_little_endian"
-                                                                                                     : "binary_big_endian";
+    const char* format = encoding == PlyEncoding::ascii    ? "ascii"
+                         : encoding == PlyEncoding::little ? "binary_little_endian"
+                                                           : "binary_big_endian";
     std::ostringstream header;
     header << "ply\nformat " << format << " 1.0\ncomment spacebvh fuzz seed\n";
     header << "element vertex " << mesh.vertices.size() << "\nproperty float x\nproperty float y\nproperty float z\n";
@@ -112,11 +116,15 @@ std::string ply_bytes(const IndexedMesh& mesh, PlyEncoding encoding, bool extras
         }
     }
     for (size_t t = 0; t < mesh.indices.size(); t += 3) {
-        if (extras) put_binary<uint32_t>(out, 3, big);
-        else put_binary<uint8_t>(out, 3, big);
+        if (extras)
+            put_binary<uint32_t>(out, 3, big);
+        else
+            put_binary<uint8_t>(out, 3, big);
         for (int c = 0; c < 3; ++c) {
-            if (extras) put_binary<int32_t>(out, int32_t(mesh.indices[t + c]), big);
-            else put_binary<uint32_t>(out, mesh.indices[t + c], big);
+            if (extras)
+                put_binary<int32_t>(out, int32_t(mesh.indices[t + c]), big);
+            else
+                put_binary<uint32_t>(out, mesh.indices[t + c], big);
         }
         if (extras) {
             put_binary<uint8_t>(out, 2, big);
@@ -158,9 +166,12 @@ std::string gltf_bytes(const IndexedMesh& mesh, int index_type, int mode, bool g
     }
     const size_t index_offset = buffer.size();
     for (uint32_t i : mesh.indices) {
-        if (index_type == 5121) put_binary<uint8_t>(buffer, uint8_t(i), false);
-        else if (index_type == 5123) put_binary<uint16_t>(buffer, uint16_t(i), false);
-        else put_binary<uint32_t>(buffer, i, false);
+        if (index_type == 5121)
+            put_binary<uint8_t>(buffer, uint8_t(i), false);
+        else if (index_type == 5123)
+            put_binary<uint16_t>(buffer, uint16_t(i), false);
+        else
+            put_binary<uint32_t>(buffer, i, false);
     }
     while (buffer.size() % 4 != 0) buffer += '\0';
     std::ostringstream json;
@@ -174,7 +185,8 @@ std::string gltf_bytes(const IndexedMesh& mesh, int index_type, int mode, bool g
          << R"({"bufferView":1,"componentType":)" << index_type << ",\"count\":" << mesh.indices.size()
          << R"(,"type":"SCALAR"}],)"
          << R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" << index_offset << "},"
-         << R"({"buffer":0,"byteOffset":)" << index_offset << ",\"byteLength\":" << buffer.size() - index_offset << "}],"
+         << R"({"buffer":0,"byteOffset":)" << index_offset << ",\"byteLength\":" << buffer.size() - index_offset
+         << "}],"
          << R"("buffers":[{"byteLength":)" << buffer.size();
     if (!glb) json << R"(,"uri":"data:application/octet-stream;base64,)" << base64(buffer) << '"';
     json << "}]}";
@@ -239,7 +251,8 @@ int main(int argc, char** argv) {
         const std::string ray_path = (scratch / "seed.rays").string(), hit_path = (scratch / "seed.hits").string();
         tools::write_ray_file(ray_path, std::span(rays).first(count));
         std::vector<tools::HitRecord> hits(count);
-        for (size_t i = 0; i < count; ++i) hits[i] = i % 2 ? tools::occlusion_record(true) : tools::HitRecord{1.5f, uint32_t(i)};
+        for (size_t i = 0; i < count; ++i)
+            hits[i] = i % 2 ? tools::occlusion_record(true) : tools::HitRecord{1.5f, uint32_t(i)};
         tools::write_hit_file(hit_path, hits);
         write_seed("ray_file", std::to_string(count) + ".rays", file_bytes_of(ray_path));
         write_seed("hit_file", std::to_string(count) + ".hits", file_bytes_of(hit_path));
@@ -273,8 +286,10 @@ int main(int argc, char** argv) {
             if (!entry.is_regular_file()) continue;
             std::string extension = entry.path().extension().string();
             for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
-            const std::string target = extension == ".obj" ? "obj" : extension == ".ply" ? "ply"
-                                     : extension == ".gltf" || extension == ".glb" ? "gltf" : "";
+            const std::string target = extension == ".obj"                           ? "obj"
+                                       : extension == ".ply"                         ? "ply"
+                                       : extension == ".gltf" || extension == ".glb" ? "gltf"
+                                                                                     : "";
             if (target.empty()) continue;
             const std::string stem = "shared_" + entry.path().stem().string();
             std::string head = read_bytes(entry.path(), 8192);
@@ -291,7 +306,8 @@ int main(int argc, char** argv) {
             const std::string all = file_bytes_of(entry.path().string());
             const size_t faces = all.find("\nf ");
             if (faces != std::string::npos)
-                write_seed(target, stem + "_faces" + extension, whole_lines(head.substr(0, 2048)) + whole_lines(all.substr(faces + 1, 4096)));
+                write_seed(target, stem + "_faces" + extension,
+                           whole_lines(head.substr(0, 2048)) + whole_lines(all.substr(faces + 1, 4096)));
         }
     }
     return 0;

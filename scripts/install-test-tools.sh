@@ -1,12 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Tools the report tests need beyond scripts/install-deps.sh: headless Chromium (Debian's `chromium`)
-# to open the generated report and check it loads with no missing image or console error.
-# The Python packages (dask[distributed], matplotlib, tqdm) come with the package's extras.
+# Tools the test command needs beyond scripts/install-deps.sh, from Debian packages: headless
+# Chromium to open the generated report and check it loads with no missing image or console error,
+# and clang-format for the formatting check (scripts/check-format.sh).
+# The Python packages (dask[distributed], matplotlib, tqdm, ruff) come with the package's extras.
 set -euo pipefail
-if command -v chromium >/dev/null; then
-  exit 0
-fi
-export DEBIAN_FRONTEND=noninteractive
-apt-get update -qq
-apt-get install -y -qq chromium >/dev/null
+source "$(dirname "$0")/lib/apt-install.sh"
+install_missing_packages chromium clang-format

@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# README command (b): install, build, and run every test: the C++ suite (GoogleTest through CTest),
-# then the Python package installed into a fresh virtual environment and tested with pytest.
+# README command (b): install, check the C++ formatting, build, and run every test: the C++ suite
+# (GoogleTest through CTest), then the Python package installed into a fresh virtual environment
+# and tested with pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/install-test-tools.sh
+bash scripts/check-format.sh
 bash scripts/build.sh
 (cd build && ctest -j "$(nproc)" --output-on-failure --timeout 900)
 bash scripts/test-python.sh

@@ -55,8 +55,10 @@ protected:
         size_t n;
         while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
         const int status = pclose(pipe);
-        if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-        else if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+        if (WIFEXITED(status))
+            result.exit_code = WEXITSTATUS(status);
+        else if (WIFSIGNALED(status))
+            result.exit_code = 128 + WTERMSIG(status);
         return result;
     }
 
@@ -105,8 +107,10 @@ protected:
         int status = 0;
         waitpid(pid, &status, 0);
         if (killed) return result;
-        if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-        else if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
+        if (WIFEXITED(status))
+            result.exit_code = WEXITSTATUS(status);
+        else if (WIFSIGNALED(status))
+            result.exit_code = 128 + WTERMSIG(status);
         return result;
     }
 
@@ -150,7 +154,8 @@ protected:
 
 inline bool has_png_signature(const std::string& bytes) {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    return bytes.size() > 33 && std::equal(signature, signature + 8, reinterpret_cast<const unsigned char*>(bytes.data()));
+    return bytes.size() > 33 &&
+           std::equal(signature, signature + 8, reinterpret_cast<const unsigned char*>(bytes.data()));
 }
 
 }  // namespace spacebvh::testing_support

@@ -131,10 +131,10 @@ void expect_agrees_with_embree(const SceneCase& c, const Tracer& tracer, const s
             verify_against_reference(c.scene, rays, closest_records(tracer, rays), c.embree_closest[k], false);
         const VerificationReport occlusion =
             verify_against_reference(c.scene, rays, occlusion_records(tracer, rays), c.embree_occlusion[k], true);
-        EXPECT_EQ(closest.ours_wrong, 0u) << "closest hit; first wrong ray "
-                                          << (closest.wrong_rays.empty() ? 0 : closest.wrong_rays.front());
-        EXPECT_EQ(occlusion.ours_wrong, 0u) << "occlusion; first wrong ray "
-                                            << (occlusion.wrong_rays.empty() ? 0 : occlusion.wrong_rays.front());
+        EXPECT_EQ(closest.ours_wrong, 0u)
+            << "closest hit; first wrong ray " << (closest.wrong_rays.empty() ? 0 : closest.wrong_rays.front());
+        EXPECT_EQ(occlusion.ours_wrong, 0u)
+            << "occlusion; first wrong ray " << (occlusion.wrong_rays.empty() ? 0 : occlusion.wrong_rays.front());
         ::testing::Test::RecordProperty(label + "_" + kKindNames[k] + "_embree_wrong",
                                         std::to_string(closest.reference_wrong + occlusion.reference_wrong));
         if (closest.reference_wrong + occlusion.reference_wrong > 0)
@@ -316,9 +316,10 @@ TEST_P(PerBuilder, SmallScenesWithManyOptionsMatchTheArbiter) {
         float c_o;
         uint32_t leaf_block = 1;
     };
-    const Variant variants[] = {{8, 64, 32, 0.0f},  {1, 64, 2, 0.0f},           {2, 64, 256, 1.0f}, {4, 3, 16, kInfinity},
-                                {1, 1024, 7, 0.0f}, {3, 64, 32, kInfinity},     {16, 2, 32, 0.5f},  {8, 64, 32, 0.0f, 4},
-                                {2, 64, 16, 1.0f, 8}, {16, 64, 32, kInfinity, 4}};
+    const Variant variants[] = {{8, 64, 32, 0.0f},         {1, 64, 2, 0.0f},     {2, 64, 256, 1.0f},
+                                {4, 3, 16, kInfinity},     {1, 1024, 7, 0.0f},   {3, 64, 32, kInfinity},
+                                {16, 2, 32, 0.5f},         {8, 64, 32, 0.0f, 4}, {2, 64, 16, 1.0f, 8},
+                                {16, 64, 32, kInfinity, 4}};
     uint64_t seed = 11;
     for (const size_t count : {1, 2, 3, 9, 40, 150, 700}) {
         for (const Variant& v : variants) {
@@ -354,7 +355,9 @@ TEST_P(PerBuilder, MaxLeafSizeIsRespected) {
         uint32_t largest = 0;
         for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
         EXPECT_LE(largest, max_leaf);
-        if (max_leaf == 1) { EXPECT_EQ(bvh.nodes.size(), 2 * bvh.primitives.size() - 1); }
+        if (max_leaf == 1) {
+            EXPECT_EQ(bvh.nodes.size(), 2 * bvh.primitives.size() - 1);
+        }
     }
 }
 
@@ -371,8 +374,11 @@ TEST_P(PerBuilder, MaxDepthIsRespected) {
         uint32_t largest = 0;
         for (const BvhNode& node : bvh.nodes) largest = std::max(largest, node.reference_count);
         EXPECT_GT(largest, options.limits.max_leaf_size);
-        if (max_depth == 1) { EXPECT_EQ(bvh.nodes.size(), 3u); }
-        if (max_depth == 10) expect_agrees_with_embree(c, Tracer(c.scene, bvh, Kernel::binary), GetParam() + "_depth10");
+        if (max_depth == 1) {
+            EXPECT_EQ(bvh.nodes.size(), 3u);
+        }
+        if (max_depth == 10)
+            expect_agrees_with_embree(c, Tracer(c.scene, bvh, Kernel::binary), GetParam() + "_depth10");
     }
 }
 
@@ -446,9 +452,15 @@ TEST_P(PerBuilder, TrianglesWithOneCommonCentroidAreSplitAndTraced) {
     for (int i = 1; i <= 60; ++i) {
         const float s = 0.0625f * float(i);  // exact, so c - s and c + s average to c exactly
         switch (i % 3) {
-            case 0: scene.triangles.push_back({c + Vec3(-s, -s, 0), c + Vec3(s, -s, 0), c + Vec3(0, s, 0)}); break;
-            case 1: scene.triangles.push_back({c + Vec3(0, -s, -s), c + Vec3(0, s, -s), c + Vec3(0, 0, s)}); break;
-            default: scene.triangles.push_back({c + Vec3(-s, 0, -s), c + Vec3(s, 0, s), c + Vec3(-s, 0, s)}); break;
+            case 0:
+                scene.triangles.push_back({c + Vec3(-s, -s, 0), c + Vec3(s, -s, 0), c + Vec3(0, s, 0)});
+                break;
+            case 1:
+                scene.triangles.push_back({c + Vec3(0, -s, -s), c + Vec3(0, s, -s), c + Vec3(0, 0, s)});
+                break;
+            default:
+                scene.triangles.push_back({c + Vec3(-s, 0, -s), c + Vec3(s, 0, s), c + Vec3(-s, 0, s)});
+                break;
         }
     }
     for (const Triangle& t : scene.triangles) ASSERT_EQ(t.bounds().center(), c);
@@ -465,9 +477,9 @@ TEST_P(PerBuilder, DegenerateOnlySceneBuildsAndIsNeverHit) {
     scene.name = "degenerate";
     for (int i = 0; i < 50; ++i) {
         const float x = float(i);
-        scene.triangles.push_back({{x, 0, 0}, {x + 0.5f, 0, 0}, {x + 1.0f, 0, 0}});      // collinear
-        scene.triangles.push_back({{x, 1, 1}, {x, 1, 1}, {x, 1, 1}});                    // a point
-        scene.triangles.push_back({{x, 2, 0}, {x + 1, 2.5f, 0}, {x + 1, 2.5f, 0}});      // repeated vertex
+        scene.triangles.push_back({{x, 0, 0}, {x + 0.5f, 0, 0}, {x + 1.0f, 0, 0}});  // collinear
+        scene.triangles.push_back({{x, 1, 1}, {x, 1, 1}, {x, 1, 1}});                // a point
+        scene.triangles.push_back({{x, 2, 0}, {x + 1, 2.5f, 0}, {x + 1, 2.5f, 0}});  // repeated vertex
     }
     const BuildConfig options = config_for(GetParam());
     const Bvh bvh = spacebvh::build(scene, options);
@@ -505,7 +517,8 @@ TEST(BuildConfig, InvalidOptionsAndEmptySceneThrow) {
     EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.spatial.bins = 1025; })), Error);
     EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = 0.5f; })), Error);
     EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = 5.0f; })), Error);
-    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = std::nanf(""); })), Error);
+    EXPECT_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.limits.reference_budget = std::nanf(""); })),
+                 Error);
     EXPECT_THROW(config_for("no-such-builder"), Error);
     EXPECT_NO_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 2; })));
     EXPECT_NO_THROW(spacebvh::build(scene, with([](BuildConfig& o) { o.object.bins = 256; })));
@@ -523,7 +536,8 @@ TEST(BuildConfig, InvalidOptionsAndEmptySceneThrow) {
 
     Scene empty;
     empty.name = "empty";
-    for (const std::string& name : builder_names()) EXPECT_THROW(spacebvh::build(empty, config_for(name)), Error) << name;
+    for (const std::string& name : builder_names())
+        EXPECT_THROW(spacebvh::build(empty, config_for(name)), Error) << name;
 }
 
 // Counting references in blocks of four makes leaves of up to four triangles as cheap as one: the
@@ -541,7 +555,8 @@ TEST(BuildConfig, LeafBlocksGiveFullerLeaves) {
             return count;
         };
         const size_t plain = leaves(1), blocks = leaves(4);
-        EXPECT_LT(double(blocks), 0.6 * double(plain)) << builder << ": " << blocks << " leaves with B = 4, " << plain << " with B = 1";
+        EXPECT_LT(double(blocks), 0.6 * double(plain))
+            << builder << ": " << blocks << " leaves with B = 4, " << plain << " with B = 1";
     }
 }
 

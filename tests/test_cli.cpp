@@ -241,8 +241,9 @@ TEST_F(Cli, CompareWritesRowsWithoutWrongAnswers) {
 // `--runs 0` (the soak's answers-only pass): one timed pass per measurement, no work-per-ray pass, and
 // every row's answers, Embree's tiled packets included, still checked ray for ray.
 TEST_F(Cli, CompareAnswersOnlyChecksEveryRow) {
-    const CliResult r = run("compare builtin:soup --builders cbvh --kernel bvh8,packet8 --embree high --embree-packets high "
-                            "--random 2000 --width 32 --height 32 --runs 0 --build-runs 1 --no-epo --json a.json");
+    const CliResult r =
+        run("compare builtin:soup --builders cbvh --kernel bvh8,packet8 --embree high --embree-packets high "
+            "--random 2000 --width 32 --height 32 --runs 0 --build-runs 1 --no-epo --json a.json");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json rows = read_json("a.json")["scenes"][0]["rows"];
     ASSERT_EQ(rows.size(), 4u) << rows.dump();
@@ -266,8 +267,9 @@ TEST_F(Cli, CompareAnswersOnlyChecksEveryRow) {
 // SPACEBVH_EMBREE_CONFIG reaches Embree's device: "verbose=3" makes Embree print the statistics of
 // the BVH it builds for the Embree row (its SAH line); without it, Embree stays silent.
 TEST_F(Cli, EmbreeConfigFromEnvironment) {
-    const std::string args = "compare builtin:soup --builders cbvh --kernel bvh8 --embree high --embree-packets none "
-                             "--random 500 --width 16 --height 16 --runs 1 --build-runs 1 --no-epo --no-verify -q";
+    const std::string args =
+        "compare builtin:soup --builders cbvh --kernel bvh8 --embree high --embree-packets none "
+        "--random 500 --width 16 --height 16 --runs 1 --build-runs 1 --no-epo --no-verify -q";
     // The child inherits the test's environment.
     setenv("SPACEBVH_EMBREE_CONFIG", "verbose=3", 1);
     const CliResult verbose = run(args);
@@ -286,9 +288,10 @@ TEST_F(Cli, LookaheadInBuildAndCompare) {
     EXPECT_EQ(read_json("l.json")["lookahead_depth"], 1);
     EXPECT_NE(build.output.find("lookahead 1"), std::string::npos) << build.output;
     nlohmann::json rows;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium "
-                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
-                                         3, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:soup --builders 'cbvh,cbvh@lookahead=1;candidates=1' --embree medium "
+                     "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                     3, rows));
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("cbvh@lookahead=1;candidates=1", 0), 0u) << rows[1];
     for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
     expect_clean_failure("build builtin:soup --lookahead 99 --no-epo", {"lookahead"});
@@ -304,13 +307,15 @@ TEST_F(Cli, LookaheadTopInBuildAndCompare) {
     ASSERT_EQ(build.exit_code, 0) << build.output;
     EXPECT_FLOAT_EQ(read_json("t.json")["lookahead_top_share"].get<float>(), 0.5f);
     nlohmann::json rows;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@top=0.5' --embree medium "
-                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
-                                         3, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:soup --builders 'spatial,spatial@top=0.5' --embree medium "
+                     "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                     3, rows));
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("spatial@top=0.5", 0), 0u) << rows[1];
     EXPECT_LE(rows[1]["sah"].get<double>(), rows[0]["sah"].get<double>() * (1 + 1e-6));
     for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
-    expect_clean_failure("build builtin:soup --builder spatial --lookahead-top 2 --no-epo", {"lookahead top share", "got 2"});
+    expect_clean_failure("build builtin:soup --builder spatial --lookahead-top 2 --no-epo",
+                         {"lookahead top share", "got 2"});
     expect_clean_failure("build builtin:soup --builder embree-high --lookahead-top 0.5 --no-epo", {"lookahead"});
     expect_clean_failure("compare builtin:soup --builders 'spatial@top=0.001'", {"lookahead top share"});
 }
@@ -329,10 +334,11 @@ TEST_F(Cli, CompareRowBinsAreTheBuildFlags) {
     ASSERT_NE(binned, binned4);
     ASSERT_NE(kdbvh, kdbvh4);
     nlohmann::json rows;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:interior --builders 'binned@bins=4,kdbvh@spatialbins=4,binned@spatialbins=4' "
-                                         "--embree none --embree-packets none --random 1000 --width 16 --height 16 --runs 1 "
-                                         "--build-runs 1 --no-epo",
-                                         3, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:interior --builders 'binned@bins=4,kdbvh@spatialbins=4,binned@spatialbins=4' "
+                     "--embree none --embree-packets none --random 1000 --width 16 --height 16 --runs 1 "
+                     "--build-runs 1 --no-epo",
+                     3, rows));
     EXPECT_DOUBLE_EQ(rows[0]["sah"].get<double>(), binned4) << rows[0];
     EXPECT_DOUBLE_EQ(rows[1]["sah"].get<double>(), kdbvh4) << rows[1];
     EXPECT_DOUBLE_EQ(rows[2]["sah"].get<double>(), binned) << rows[2];  // binned has no spatial search space
@@ -352,14 +358,16 @@ TEST_F(Cli, OptimizeInBuildAndCompare) {
     EXPECT_EQ(plain["reinsertion_iterations"], 0);
     EXPECT_LT(optimized["sah"].get<double>(), plain["sah"].get<double>());
     EXPECT_EQ(optimized["nodes"], plain["nodes"]);
-    ASSERT_EQ(run("build builtin:soup --builder binned+opt --optimize-iterations 3 --no-epo --json three.json").exit_code, 0);
+    ASSERT_EQ(
+        run("build builtin:soup --builder binned+opt --optimize-iterations 3 --no-epo --json three.json").exit_code, 0);
     EXPECT_EQ(read_json("three.json")["reinsertion_iterations"], 3);
     EXPECT_EQ(read_json("three.json")["builder"], "binned+opt");
 
     nlohmann::json rows;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'binned,binned+opt,cbvh@optimize=2' --embree medium "
-                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
-                                         4, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:soup --builders 'binned,binned+opt,cbvh@optimize=2' --embree medium "
+                     "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                     4, rows));
     EXPECT_EQ(rows[0]["builder"].get<std::string>().rfind("binned (", 0), 0u) << rows[0];
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("binned+opt (", 0), 0u) << rows[1];
     EXPECT_EQ(rows[2]["builder"].get<std::string>().rfind("cbvh+opt@optimize=2 (", 0), 0u) << rows[2];
@@ -375,7 +383,8 @@ TEST_F(Cli, OptimizeInBuildAndCompare) {
 // hang. (--progress: progress lines on the pipe tell when the build is under way.)
 TEST_F(Cli, InterruptStopsALongBuildWithExitCode130) {
     const CliResult r = run_and_interrupt(
-        {"build", "builtin:interior", "--builder", "spatial", "--lookahead", "2", "--no-epo", "--progress"}, "building", 120);
+        {"build", "builtin:interior", "--builder", "spatial", "--lookahead", "2", "--no-epo", "--progress"}, "building",
+        120);
     EXPECT_EQ(r.exit_code, 130) << r.output;
     EXPECT_NE(r.output.find("stopped"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("SAH"), std::string::npos) << "the build finished instead:\n" << r.output;
@@ -444,7 +453,8 @@ TEST_F(Cli, OptimumReportAndSearchSpaceUnions) {
     // With C_o = inf a node whose every partition overlaps has no feasible optimum and is left out.
     EXPECT_GE(json["random"]["nodes"].get<int>(), 6);
     EXPECT_LE(json["random"]["nodes"].get<int>(), 12);
-    const CliResult union_build = run("build builtin:soup --builder cbvh --search object,grid --co 0.5 --no-epo --quiet");
+    const CliResult union_build =
+        run("build builtin:soup --builder cbvh --search object,grid --co 0.5 --no-epo --quiet");
     EXPECT_EQ(union_build.exit_code, 0) << union_build.output;
     expect_clean_failure("build builtin:soup --search object,kd --no-epo", {"kd"});
     expect_clean_failure("build builtin:soup --grid-max 40 --no-epo", {"grid max"});

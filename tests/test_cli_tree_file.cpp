@@ -50,8 +50,9 @@ TEST_F(TreeFileCli, RenderAndCompareWithASavedTree) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(has_png_signature(read("a.png")));
 
-    const std::string common = "builtin:organic --tree t.sbvh --random 2000 --width 16 --height 16 --runs 1 "
-                               "--build-runs 1 --no-epo --embree medium --embree-packets none";
+    const std::string common =
+        "builtin:organic --tree t.sbvh --random 2000 --width 16 --height 16 --runs 1 "
+        "--build-runs 1 --no-epo --embree medium --embree-packets none";
     nlohmann::json rows;
     ASSERT_NO_FATAL_FAILURE(compare_rows(common, 2, rows));
     EXPECT_EQ(rows[0]["builder"], "t.sbvh: binned (C_o=0.00)");

@@ -217,7 +217,8 @@ TEST(Clip, RepeatedSplitsNeverLoseTheReference) {
         AABB current = clip_triangle_bounds(c.triangle, c.box);
         for (int level = 0; level < 8 && !current.is_empty(); ++level) {
             int axis = int(rng() % 3);
-            float position = current.lo[axis] + float(int(unit(rng) * 5.0f)) * 0.25f * (current.hi[axis] - current.lo[axis]);
+            float position =
+                current.lo[axis] + float(int(unit(rng) * 5.0f)) * 0.25f * (current.hi[axis] - current.lo[axis]);
             SplitBounds split = split_triangle_bounds(c.triangle, current, axis, position);
             ASSERT_FALSE(split.left.is_empty() && split.right.is_empty()) << "case " << i << " level " << level;
             ASSERT_TRUE(current.contains(split.left) && current.contains(split.right));

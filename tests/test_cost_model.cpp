@@ -104,7 +104,7 @@ TEST(CostModel, InfiniteOverlapPenaltyForbidsOverlapOnly) {
 TEST(CostModel, OverlapFractionIsTheVolumeRatioForSolidNodes) {
     EXPECT_FLOAT_EQ(overlap_fraction(kNode, kLeftWide, kRightWide), 0.5f);
     EXPECT_FLOAT_EQ(overlap_fraction(kNode, kNode, kNode), 1.0f);
-    EXPECT_EQ(overlap_fraction(kNode, kLeftHalf, kRightHalf), 0.0f);  // touching
+    EXPECT_EQ(overlap_fraction(kNode, kLeftHalf, kRightHalf), 0.0f);                                 // touching
     EXPECT_EQ(overlap_fraction(kNode, box({0, 0, 0}, {1, 1, 1}), box({3, 1, 1}, {4, 2, 2})), 0.0f);  // disjoint
     EXPECT_EQ(overlap_fraction(kNode, AABB::empty(), kNode), 0.0f);
     EXPECT_EQ(overlap_fraction(kNode, kNode, AABB::empty()), 0.0f);
@@ -139,8 +139,9 @@ TEST(CostModel, OverlapFractionOfAFlatNodeIsTheAreaRatioInItsPlane) {
     const CostModel penalised = model(1.0f, 1.0f, 1.0f);
     const float cost = penalised.split_cost(plane, box({0, 0, 1}, {3, 2, 1}), 1, box({1, 0, 1}, {4, 2, 1}), 1);
     EXPECT_FLOAT_EQ(cost, 1.0f + 1.5f * (12.0f + 12.0f) / 16.0f);
-    EXPECT_EQ(model(1.0f, 1.0f, kInfinity).split_cost(plane, box({0, 0, 1}, {3, 2, 1}), 1, box({1, 0, 1}, {4, 2, 1}), 1),
-              kInfinity);
+    EXPECT_EQ(
+        model(1.0f, 1.0f, kInfinity).split_cost(plane, box({0, 0, 1}, {3, 2, 1}), 1, box({1, 0, 1}, {4, 2, 1}), 1),
+        kInfinity);
     EXPECT_TRUE(std::isfinite(
         model(1.0f, 1.0f, kInfinity).split_cost(plane, box({0, 0, 1}, {2, 2, 1}), 1, box({2, 0, 1}, {4, 2, 1}), 1)));
 }
@@ -220,7 +221,8 @@ TEST(CostModel, LeafBlocksRoundReferenceCountsUp) {
     EXPECT_EQ(blocks.leaf_cost(4), 8.0f);
     EXPECT_EQ(blocks.leaf_cost(5), 16.0f);
     // 1.5 + 2 * (24*4 + 24*8) / 40: |L| = 3 counts as 4, |R| = 5 as 8.
-    EXPECT_FLOAT_EQ(blocks.split_cost(kNode, kLeftHalf, 3, kRightHalf, 5), 1.5f + 2.0f * (24.0f * 4 + 24.0f * 8) / 40.0f);
+    EXPECT_FLOAT_EQ(blocks.split_cost(kNode, kLeftHalf, 3, kRightHalf, 5),
+                    1.5f + 2.0f * (24.0f * 4 + 24.0f * 8) / 40.0f);
     // The same counts in whole blocks cost what the plain SAH says.
     EXPECT_FLOAT_EQ(blocks.split_cost(kNode, kLeftHalf, 4, kRightHalf, 8),
                     model(1.5f, 2.0f, 0.0f).split_cost(kNode, kLeftHalf, 4, kRightHalf, 8));
@@ -248,9 +250,12 @@ TEST(CostModel, SimdBoxesPriceExactlyAsAabbs) {
     auto coordinate = [&]() {
         const float values[] = {-2.5f, -1.0f, -0.0f, 0.0f, 0.75f, 1.0f, 3.0f, 1e-30f, 7.25f};
         switch (next() % 3) {
-            case 0: return values[next() % 9];
-            case 1: return float(int(next() % 2001) - 1000) / 64.0f;
-            default: return float(next()) * 0x1p-25f - 50.0f;  // full mantissas: rounding matters
+            case 0:
+                return values[next() % 9];
+            case 1:
+                return float(int(next() % 2001) - 1000) / 64.0f;
+            default:
+                return float(next()) * 0x1p-25f - 50.0f;  // full mantissas: rounding matters
         }
     };
     auto random_box = [&]() {

@@ -75,13 +75,15 @@ std::string check_structure(const Scene& scene, const Bvh& bvh, uint32_t max_lea
             if (node.first <= index || size_t(node.first) + 1 >= bvh.nodes.size())
                 return where + ": children at " + std::to_string(node.first) + " do not follow it";
             for (uint32_t c = node.first; c <= node.first + 1; ++c)
-                if (!node.bounds.contains(bvh.nodes[c].bounds)) return where + " does not contain child " + std::to_string(c);
+                if (!node.bounds.contains(bvh.nodes[c].bounds))
+                    return where + " does not contain child " + std::to_string(c);
             stack.push_back(node.first + 1);
             stack.push_back(node.first);
             continue;
         }
         if (node.reference_count > max_leaf_size)
-            return where + " is a leaf of " + std::to_string(node.reference_count) + " > " + std::to_string(max_leaf_size);
+            return where + " is a leaf of " + std::to_string(node.reference_count) + " > " +
+                   std::to_string(max_leaf_size);
         if (size_t(node.first) + node.reference_count > bvh.primitives.size()) return where + ": range out of bounds";
         leaf_entries += node.reference_count;
         for (uint32_t k = node.first; k < node.first + node.reference_count; ++k) {
@@ -174,10 +176,10 @@ TEST(EmbreeBuilder, OurTracerOverEmbreeTreesAgreesWithEmbree) {
                 verify_against_reference(scene, rays, closest_records(tracer, rays), embree_closest, false);
             const VerificationReport occlusion =
                 verify_against_reference(scene, rays, occlusion_records(tracer, rays), embree_occlusion, true);
-            EXPECT_EQ(closest.ours_wrong, 0u) << "closest hit; first wrong ray "
-                                              << (closest.wrong_rays.empty() ? 0 : closest.wrong_rays.front());
-            EXPECT_EQ(occlusion.ours_wrong, 0u) << "occlusion; first wrong ray "
-                                                << (occlusion.wrong_rays.empty() ? 0 : occlusion.wrong_rays.front());
+            EXPECT_EQ(closest.ours_wrong, 0u)
+                << "closest hit; first wrong ray " << (closest.wrong_rays.empty() ? 0 : closest.wrong_rays.front());
+            EXPECT_EQ(occlusion.ours_wrong, 0u)
+                << "occlusion; first wrong ray " << (occlusion.wrong_rays.empty() ? 0 : occlusion.wrong_rays.front());
             if (closest.reference_wrong + occlusion.reference_wrong > 0)
                 std::printf("[ info ] %s %s: Embree wrong on %zu closest, %zu occlusion of %zu rays\n", name,
                             to_string(quality), closest.reference_wrong, occlusion.reference_wrong, rays.size());

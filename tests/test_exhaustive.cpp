@@ -91,10 +91,11 @@ TEST(Exhaustive, NoObjectPartitioningSearchSpaceBeatsTheOptimum) {
         const BinnedObjectSplitFinder binned(16);
         const GridSplitFinder grid_finder(node.triangles, grid);
         const Split none;
-        for (const SplitFinder* finder : {static_cast<const SplitFinder*>(&sweep), static_cast<const SplitFinder*>(&binned),
-                                          static_cast<const SplitFinder*>(&grid_finder)}) {
-            const NodeContext context{node.references, node.summary, node.references.size(),
-                                      node.summary.bounds.area(), none};
+        for (const SplitFinder* finder :
+             {static_cast<const SplitFinder*>(&sweep), static_cast<const SplitFinder*>(&binned),
+              static_cast<const SplitFinder*>(&grid_finder)}) {
+            const NodeContext context{node.references, node.summary, node.references.size(), node.summary.bounds.area(),
+                                      none};
             const Split split = finder->find(context, cost);
             EXPECT_GE(split.cost, optimum.cost) << finder->name() << ", trial " << trial;
             if (finder == &sweep) sweep_above_optimum += split.cost > optimum.cost;
@@ -109,7 +110,8 @@ TEST(Exhaustive, RefusesLargeNodes) {
     std::mt19937 random(2);
     const Node node = random_node(random, uint32_t(kMaxExhaustiveReferences + 1));
     EXPECT_THROW(exhaustive_split(node.references, node.summary.bounds, CostModel{}), Error);
-    EXPECT_FALSE(exhaustive_split(std::span(node.references).first(1), node.summary.bounds, CostModel{}).cost < kInfinity);
+    EXPECT_FALSE(exhaustive_split(std::span(node.references).first(1), node.summary.bounds, CostModel{}).cost <
+                 kInfinity);
 }
 
 }  // namespace

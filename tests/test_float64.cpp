@@ -80,8 +80,8 @@ std::vector<Ray64> feature_rays(const std::vector<Triangle64>& triangles, const 
             rays.push_back({eye, minus(p, eye)});
             const Vec3d mid{0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])};
             rays.push_back({eye, minus(mid, eye)});
-            rays.push_back({p, minus(q, p)});                                 // along the edge
-            rays.push_back({minus(p, minus(q, p)), minus(q, p)});             // along, starting outside
+            rays.push_back({p, minus(q, p)});                      // along the edge
+            rays.push_back({minus(p, minus(q, p)), minus(q, p)});  // along, starting outside
             Vec3d nudged = minus(p, eye);
             const double largest = std::max({std::fabs(nudged[0]), std::fabs(nudged[1]), std::fabs(nudged[2])});
             nudged[k] = nudged[k] != 0.0 ? std::nextafter(nudged[k], INFINITY) : std::ldexp(largest, -60);
@@ -220,7 +220,8 @@ TEST(Float64Tracer, FeatureRaysEqualRationalReference) {
         // From inside (the centre) every ray must hit: the box is closed (watertight at edges and
         // vertices); from outside, rays graze and cross edges.
         const double out = place.step * place.cells * 3;
-        for (const Vec3d& eye : {place.centre, Vec3d{place.centre[0] + out, place.centre[1] + out / 2, place.centre[2] - out}}) {
+        for (const Vec3d& eye :
+             {place.centre, Vec3d{place.centre[0] + out, place.centre[1] + out / 2, place.centre[2] - out}}) {
             const bool inside = eye == place.centre;
             const std::vector<Ray64> rays = feature_rays(triangles, eye, 300);
             std::vector<Hit64> hits(rays.size());
@@ -269,7 +270,8 @@ TEST(Float64Tracer, RangeEndsAreExact) {
 TEST(Float64Tracer, TreeEqualsBruteForceOnScaledScenes) {
     for (const char* name : {"interior", "organic"}) {
         const tools::Scene scene = tools::make_builtin_scene(name);
-        for (const auto& [scale, offset] : {std::pair{1e-6 / scene.diagonal(), 0.0}, std::pair{1.0 / scene.diagonal(), 1e7}}) {
+        for (const auto& [scale, offset] :
+             {std::pair{1e-6 / scene.diagonal(), 0.0}, std::pair{1.0 / scene.diagonal(), 1e7}}) {
             std::vector<double> xyz;
             for (const Triangle& t : scene.triangles)
                 for (Vec3 v : {t.v0, t.v1, t.v2})
@@ -341,9 +343,9 @@ TEST(Float64Tracer, BoxesContainTheFloat64Triangles) {
 TEST(Float64Tracer, TinyTriangleBesideLargeMeshIsHit) {
     const double tiny = 1e-9;
     const std::vector<double> xyz = {
-        0, 0, 0, 100, 0, 0, 0, 100, 0,                     // large
-        20, 20, 10, 20 + tiny, 20, 10, 20, 20 + tiny, 10,  // tiny: below float resolution at 30 from the centre
-        0, 0, 20, 1, 1, 20, 2, 2, 20};                     // collinear
+        0,  0,  0,  100,       0,  0,  0,  100,       0,    // large
+        20, 20, 10, 20 + tiny, 20, 10, 20, 20 + tiny, 10,   // tiny: below float resolution at 30 from the centre
+        0,  0,  20, 1,         1,  20, 2,  2,         20};  // collinear
     const std::vector<uint32_t> indices = identity_indices(3);
     const Tracer64 tracer(MeshView(xyz, indices));
     EXPECT_GE(tracer.unindexed_count(), 1u);
@@ -372,7 +374,8 @@ TEST(Float64Tracer, OutOfRangeInputIsAClearError) {
         EXPECT_NE(std::string(e.what()).find("ray 1"), std::string::npos) << e.what();
     }
     // A tree built over the global float triangles instead of the local-frame stand-ins.
-    const std::vector<double> far_xyz = {1e7, 0, 0, 1e7 + 1, 0, 0, 1e7, 1, 0, 1e7 + 9, 0, 0, 1e7 + 10, 0, 0, 1e7 + 9, 1, 0};
+    const std::vector<double> far_xyz = {1e7,     0, 0, 1e7 + 1,  0, 0, 1e7,     1, 0,
+                                         1e7 + 9, 0, 0, 1e7 + 10, 0, 0, 1e7 + 9, 1, 0};
     const std::vector<uint32_t> two = {0, 1, 2, 3, 4, 5};
     const MeshView far(far_xyz, two);
     EXPECT_THROW(Tracer64(far, build(MeshView(far.triangles()), Quality::fast)), Error);

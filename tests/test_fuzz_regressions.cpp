@@ -56,8 +56,9 @@ TEST(FuzzTargets, WellFormedInputsLoad) {
     const std::string row = "spatial@leaf=4;budget=1.5";
     EXPECT_NO_THROW(spacebvh::fuzz::feed("builder_spec", {reinterpret_cast<const uint8_t*>(row.data()), row.size()}));
     const std::string bad_row = "spatial@leaf=-1";
-    EXPECT_THROW(spacebvh::fuzz::feed("builder_spec", {reinterpret_cast<const uint8_t*>(bad_row.data()), bad_row.size()}),
-                 spacebvh::Error);
+    EXPECT_THROW(
+        spacebvh::fuzz::feed("builder_spec", {reinterpret_cast<const uint8_t*>(bad_row.data()), bad_row.size()}),
+        spacebvh::Error);
 }
 
 }  // namespace

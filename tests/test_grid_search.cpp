@@ -33,8 +33,10 @@ Node random_node(std::mt19937& random, uint32_t count) {
     for (uint32_t i = 0; i < count; ++i) {
         const Vec3 center{coordinate(random), coordinate(random), coordinate(random)};
         const float s = size(random);
-        auto offset = [&] { return Vec3{s * (coordinate(random) / 10 - 0.5f), s * (coordinate(random) / 10 - 0.5f),
-                                        s * (coordinate(random) / 10 - 0.5f)}; };
+        auto offset = [&] {
+            return Vec3{s * (coordinate(random) / 10 - 0.5f), s * (coordinate(random) / 10 - 0.5f),
+                        s * (coordinate(random) / 10 - 0.5f)};
+        };
         Triangle t{center + offset(), center + offset(), center + offset()};
         if (i % 4 == 3) {
             const int flat = int(i / 4 % 3);  // axis-aligned: a wall
@@ -53,7 +55,9 @@ Node grid_aligned_node(std::mt19937& random, uint32_t count, uint32_t cells) {
     const float g = float(cells);
     std::vector<Triangle> triangles = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{g, g, g}, {g - 1, g, g}, {g, g - 1, g}}};
     for (uint32_t i = 0; i < count; ++i) {
-        auto point = [&] { return Vec3{float(coordinate(random)), float(coordinate(random)), float(coordinate(random))}; };
+        auto point = [&] {
+            return Vec3{float(coordinate(random)), float(coordinate(random)), float(coordinate(random))};
+        };
         triangles.push_back({point(), point(), point()});
     }
     return small_node(std::move(triangles));
@@ -77,7 +81,8 @@ std::vector<std::pair<Interval, Interval>> inheriting_pairs(uint32_t last) {
 
 template <typename Visit>
 void for_each_configuration(const ContainmentGrid& grid, Visit visit) {
-    const auto x = inheriting_pairs(grid.cells(0)), y = inheriting_pairs(grid.cells(1)), z = inheriting_pairs(grid.cells(2));
+    const auto x = inheriting_pairs(grid.cells(0)), y = inheriting_pairs(grid.cells(1)),
+               z = inheriting_pairs(grid.cells(2));
     for (const auto& px : x)
         for (const auto& py : y)
             for (const auto& pz : z) {
@@ -94,15 +99,20 @@ void for_each_configuration(const ContainmentGrid& grid, Visit visit) {
 struct BruteCounts {
     uint32_t left = 0, right = 0, neither = 0;
 };
-BruteCounts brute_counts(const ContainmentGrid& grid, const GridConfiguration& c, std::span<const Reference> references) {
+BruteCounts brute_counts(const ContainmentGrid& grid, const GridConfiguration& c,
+                         std::span<const Reference> references) {
     const AABB left = grid.box(c.left), right = grid.box(c.right);
     BruteCounts counts;
     for (const Reference& reference : references) {
         const bool in_left = left.contains(reference.bounds), in_right = right.contains(reference.bounds);
-        if (in_left && in_right) (left.area() <= right.area() ? counts.left : counts.right)++;
-        else if (in_left) counts.left++;
-        else if (in_right) counts.right++;
-        else counts.left++, counts.right++, counts.neither++;
+        if (in_left && in_right)
+            (left.area() <= right.area() ? counts.left : counts.right)++;
+        else if (in_left)
+            counts.left++;
+        else if (in_right)
+            counts.right++;
+        else
+            counts.left++, counts.right++, counts.neither++;
     }
     return counts;
 }
@@ -112,13 +122,13 @@ TEST(GridSearch, CellsFollowTheRuleWithinTheCap) {
     options.resolution = 2.0f;
     options.max_cells = 8;
     EXPECT_EQ(grid_cells_for(1, options), 2u);
-    EXPECT_EQ(grid_cells_for(64, options), 4u);      // 2 * 64^(1/6) = 4
-    EXPECT_EQ(grid_cells_for(729, options), 6u);     // 2 * 3
-    EXPECT_EQ(grid_cells_for(4096, options), 8u);    // 2 * 4 = 8, the cap
+    EXPECT_EQ(grid_cells_for(64, options), 4u);    // 2 * 64^(1/6) = 4
+    EXPECT_EQ(grid_cells_for(729, options), 6u);   // 2 * 3
+    EXPECT_EQ(grid_cells_for(4096, options), 8u);  // 2 * 4 = 8, the cap
     EXPECT_EQ(grid_cells_for(1000000, options), 8u);
     options.resolution = 1.0f;
     EXPECT_EQ(grid_cells_for(4096, options), 4u);
-    EXPECT_EQ(grid_cells_for(4097, options), 5u);    // the ceiling
+    EXPECT_EQ(grid_cells_for(4097, options), 5u);  // the ceiling
 }
 
 // Every grid box's containment count equals a direct count, and every configuration's forced
@@ -141,8 +151,9 @@ TEST(GridSearch, CountsEqualBruteForceForEveryConfiguration) {
                                 b.lo = {uint8_t(l0), uint8_t(l1), uint8_t(l2)};
                                 b.hi = {uint8_t(h0), uint8_t(h1), uint8_t(h2)};
                                 const AABB box = grid.box(b);
-                                const auto direct = std::count_if(node.references.begin(), node.references.end(),
-                                                                  [&](const Reference& r) { return box.contains(r.bounds); });
+                                const auto direct =
+                                    std::count_if(node.references.begin(), node.references.end(),
+                                                  [&](const Reference& r) { return box.contains(r.bounds); });
                                 ASSERT_EQ(grid.contained(b), uint32_t(direct)) << "trial " << trial;
                             }
         for_each_configuration(grid, [&](const GridConfiguration& c) {

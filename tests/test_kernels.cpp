@@ -120,8 +120,8 @@ TEST_P(KernelsOnScene, AnswersEqualTheReferenceKernel) {
             for (size_t set = 0; set < sets.size(); ++set) {
                 const auto& [set_name, rays] = sets[set];
                 SCOPED_TRACE(std::string(builder) + ", " + kernel + ", " + set_name);
-                const auto closest =
-                    verify_against_reference(scene, rays, closest_records(*tracer, rays), reference_closest[set], false);
+                const auto closest = verify_against_reference(scene, rays, closest_records(*tracer, rays),
+                                                              reference_closest[set], false);
                 EXPECT_EQ(closest.ours_wrong, 0u);
                 EXPECT_EQ(closest.reference_wrong, 0u);
                 // Occlusion has no ties: the answers are identical.
@@ -154,9 +154,9 @@ TEST(Packets, PartlyInactiveAndIncoherentPacketsMatchTheArbiter) {
     const Scene& scene = cached_builtin_scene("interior");
     const Bvh bvh = spacebvh::build(scene, config_for("cbvh"));
     std::vector<Ray> rays = generate_primary_rays(default_camera(scene), 20, 10);  // 200 rays
-    for (size_t i = 0; i < rays.size(); i += 7) rays[i].tmax = -1.0f;                 // empty segment
-    for (size_t i = 3; i < rays.size(); i += 11) rays[i].tmax = rays[i].tmin;         // a point
-    for (size_t i = 150; i < 180; ++i) rays[i].dir = -rays[i].dir;                     // mixed signs
+    for (size_t i = 0; i < rays.size(); i += 7) rays[i].tmax = -1.0f;              // empty segment
+    for (size_t i = 3; i < rays.size(); i += 11) rays[i].tmax = rays[i].tmin;      // a point
+    for (size_t i = 150; i < 180; ++i) rays[i].dir = -rays[i].dir;                 // mixed signs
     for (uint32_t size : {1u, 7u, 64u, 256u}) {
         for (NodeTest test : supported_node_tests(8)) {
             if (test == NodeTest::sse) continue;
@@ -190,7 +190,8 @@ TEST(Kernels, CallerFlushToZeroModeChangesNoAnswer) {
     size_t truth_hits = 0;
     for (const HitRecord& record : truth) truth_hits += record.is_hit();
     EXPECT_GT(truth_hits, 50u);
-    for (const std::string& kernel : {std::string("binary"), std::string("bvh4"), std::string("bvh8"), std::string("packet8")}) {
+    for (const std::string& kernel :
+         {std::string("binary"), std::string("bvh4"), std::string("bvh8"), std::string("packet8")}) {
         const std::unique_ptr<Tracer> tracer = make_tracer(kernel, scene, bvh);
         std::vector<HitRecord> single;
         const unsigned saved = _mm_getcsr();
@@ -252,14 +253,16 @@ TEST(Kernels, BadChoicesAreClearErrors) {
     EXPECT_THROW(make_tracer("bvh4-avx2", scene, bvh), Error);
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh4, NodeTest::avx2}), Error);
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::sse}), Error);
-    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 257}), Error);
+    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 257}),
+                 Error);
     EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh8, NodeTest::best, WideCollapse::sah_optimal, 64}), Error);
     // The moller leaf test: single-ray bvh4 and bvh8 kernels only.
     EXPECT_THROW(make_tracer("packet8+moller", scene, bvh), Error);
     EXPECT_THROW(make_tracer("binary+moller", scene, bvh), Error);
     EXPECT_THROW(make_tracer("bvh8-scalar+moller", scene, bvh), Error);
     EXPECT_THROW(make_tracer("bvh8+woop", scene, bvh), Error);
-    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet16, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::moller}),
+    EXPECT_THROW(Tracer(scene, bvh,
+                        TracerConfig{Kernel::packet16, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::moller}),
                  Error);
     EXPECT_EQ(make_tracer("bvh8+moller@area", scene, bvh)->config().leaf_test, LeafTest::moller);
     try {
@@ -371,12 +374,14 @@ TEST(Kernels, LeafPackerCoversEveryLeafAndSharesPacks) {
                 Vec3 vertex[3];
                 trace::pack_triangle(pack, int(lane % 4), vertex);
                 const Triangle& triangle = scene.triangles[primitive];
-                EXPECT_TRUE(vertex[0] == triangle.v0 && vertex[1] == triangle.v1 && vertex[2] == triangle.v2) << builder;
+                EXPECT_TRUE(vertex[0] == triangle.v0 && vertex[1] == triangle.v1 && vertex[2] == triangle.v2)
+                    << builder;
                 lanes.insert(primitive);
             }
             for (uint32_t i = node.first; i < node.first + node.reference_count; ++i)
                 if (!scene.triangles[bvh.primitives[i]].is_degenerate()) {
-                    EXPECT_TRUE(lanes.count(bvh.primitives[i])) << builder << ": leaf misses triangle " << bvh.primitives[i];
+                    EXPECT_TRUE(lanes.count(bvh.primitives[i]))
+                        << builder << ": leaf misses triangle " << bvh.primitives[i];
                 }
         }
         EXPECT_GT(leaves, 100u) << builder;
@@ -448,8 +453,10 @@ TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
     const auto add_wall = [&](float x0, float x1, float z, int columns, int rows) {
         for (int i = 0; i < columns; ++i)
             for (int j = 0; j < rows; ++j) {
-                const float xa = x0 + (x1 - x0) * float(i) / float(columns), xb = x0 + (x1 - x0) * float(i + 1) / float(columns);
-                const float ya = -5.0f + 10.0f * float(j) / float(rows), yb = -5.0f + 10.0f * float(j + 1) / float(rows);
+                const float xa = x0 + (x1 - x0) * float(i) / float(columns),
+                            xb = x0 + (x1 - x0) * float(i + 1) / float(columns);
+                const float ya = -5.0f + 10.0f * float(j) / float(rows),
+                            yb = -5.0f + 10.0f * float(j + 1) / float(rows);
                 scene.triangles.push_back({{xa, ya, z}, {xb, ya, z}, {xb, yb, z}});
                 scene.triangles.push_back({{xa, ya, z}, {xb, yb, z}, {xa, yb, z}});
             }
@@ -470,16 +477,21 @@ TEST(Packets, OcclusionWithRaysBlockedEarlyAndLateMatchesTheArbiter) {
                 rays.push_back(ray);
             }
     };
-    add_group([](int i, int) { return -4.5f + 0.2f * float(i); }, kInfinity);                   // all blocked by the near wall
-    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity);  // alternate near / far
-    add_group([](int i, int j) { return (i + j) % 3 ? -3.0f : 1.0f + 0.3f * float(i); }, kInfinity);    // first ray blocked late
-    add_group([](int i, int j) { return (i + j) % 3 ? 4.0f + 0.1f * float(i) : -2.0f; }, kInfinity);    // first ray misses the far wall
-    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 1.5f);                        // segments end before both walls
-    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 5.0f);                        // only the near wall is in reach
+    add_group([](int i, int) { return -4.5f + 0.2f * float(i); }, kInfinity);  // all blocked by the near wall
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); },
+              kInfinity);  // alternate near / far
+    add_group([](int i, int j) { return (i + j) % 3 ? -3.0f : 1.0f + 0.3f * float(i); },
+              kInfinity);  // first ray blocked late
+    add_group([](int i, int j) { return (i + j) % 3 ? 4.0f + 0.1f * float(i) : -2.0f; },
+              kInfinity);                                                 // first ray misses the far wall
+    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 1.5f);  // segments end before both walls
+    add_group([](int i, int) { return -4.5f + 0.6f * float(i); }, 5.0f);  // only the near wall is in reach
     // Direction y changes sign within the packets (a tile across the horizon: one packet per sign
     // octant), and also direction x is 0 for a column (those rays cannot join a packet).
-    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.02f, -0.02f);
-    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.0f, -0.02f);
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.02f,
+              -0.02f);
+    add_group([](int i, int) { return i % 2 ? 0.5f + 0.25f * float(i) : -4.0f + 0.1f * float(i); }, kInfinity, 0.0f,
+              -0.02f);
 
     std::vector<uint8_t> expected(rays.size());
     make_tracer("bvh8", scene, bvh)->occluded(rays, expected);
@@ -547,7 +559,8 @@ void check_visit_key_order(std::mt19937& random) {
             return a > b;
         });
         for (int i = 0; i < n; ++i)
-            ASSERT_EQ(trace::visit_key_slot(key[i]), expected[size_t(i)]) << "W " << W << ", trial " << trial << ", position " << i;
+            ASSERT_EQ(trace::visit_key_slot(key[i]), expected[size_t(i)])
+                << "W " << W << ", trial " << trial << ", position " << i;
     }
 }
 

@@ -198,10 +198,11 @@ void check_scene(const Scene& scene, size_t max_packs, uint64_t seed, bool expec
             if (::testing::Test::HasFailure()) return;
         }
     }
-    std::printf("%s: %zu lanes; moller: edges certain %.4f, hits certain %.4f, rejected %.4f; watertight: edges certain %.4f\n",
-                scene.name.c_str(), tally.lanes, double(tally.certain_edges) / tally.lanes,
-                double(tally.certain_within) / tally.lanes, double(tally.certain_rejected) / tally.lanes,
-                double(tally.watertight_certain) / tally.lanes);
+    std::printf(
+        "%s: %zu lanes; moller: edges certain %.4f, hits certain %.4f, rejected %.4f; watertight: edges certain %.4f\n",
+        scene.name.c_str(), tally.lanes, double(tally.certain_edges) / tally.lanes,
+        double(tally.certain_within) / tally.lanes, double(tally.certain_rejected) / tally.lanes,
+        double(tally.watertight_certain) / tally.lanes);
     // Not vacuous: most lanes are decided by the filters.
     if (expect_decisions) {
         EXPECT_GT(tally.watertight_certain, tally.lanes / 2) << scene.name;
@@ -223,8 +224,8 @@ void check_scene(const Scene& scene, size_t max_packs, uint64_t seed, bool expec
         moller->occluded(all_rays, occluded);
         size_t different = 0;
         for (size_t i = 0; i < all_rays.size(); ++i)
-            different += std::memcmp(&hits[i].t, &expected[i].t, sizeof(float)) != 0 || hits[i].primitive != expected[i].primitive ||
-                         occluded[i] != expected_occluded[i];
+            different += std::memcmp(&hits[i].t, &expected[i].t, sizeof(float)) != 0 ||
+                         hits[i].primitive != expected[i].primitive || occluded[i] != expected_occluded[i];
         EXPECT_EQ(different, 0u) << scene.name << ", " << kernel << ", " << all_rays.size() << " rays";
     }
 }

@@ -94,8 +94,9 @@ TEST(FindCandidates, AreTheCheapestPerAxisAndStartWithFindsSplit) {
                     space->find_candidates({b, summary, b.size(), summary.bounds.area(), none}, cost, per_axis);
                 ASSERT_EQ(found.is_valid(), !candidates.empty());
                 if (candidates.empty()) continue;
-                const auto first_cheapest = std::min_element(
-                    candidates.begin(), candidates.end(), [](const Split& x, const Split& y) { return x.cost < y.cost; });
+                const auto first_cheapest =
+                    std::min_element(candidates.begin(), candidates.end(),
+                                     [](const Split& x, const Split& y) { return x.cost < y.cost; });
                 EXPECT_TRUE(same_split(*first_cheapest, found));
                 std::vector<float> costs_on_axis[3];
                 for (size_t i = 0; i < candidates.size(); ++i) {
@@ -150,12 +151,14 @@ TEST(ObjectSweep, SplitDoesNotDependOnTheReferencesOrder) {
             const Split none;
             std::vector<Reference> shuffled = node.references;
             std::shuffle(shuffled.begin(), shuffled.end(), random);
-            const Split reference_split = sweep.find({shuffled, summary, shuffled.size(), summary.bounds.area(), none}, cost);
+            const Split reference_split =
+                sweep.find({shuffled, summary, shuffled.size(), summary.bounds.area(), none}, cost);
             for (int axis = 0; axis < 3; ++axis) {
                 std::vector<Reference> sorted = node.references;
                 std::sort(sorted.begin(), sorted.end(), builders::CentroidOrder{axis});
                 const Split split = sweep.find({sorted, summary, sorted.size(), summary.bounds.area(), none}, cost);
-                EXPECT_TRUE(same_split(split, reference_split)) << node.references.size() << " references, sorted on " << axis;
+                EXPECT_TRUE(same_split(split, reference_split))
+                    << node.references.size() << " references, sorted on " << axis;
                 ++checked;
             }
         }
@@ -177,7 +180,8 @@ std::vector<Reference> references_with_equal_keys(size_t count, uint32_t seed) {
         if (i % 3 == 0) lo = Vec3(float(coarse(random)), float(coarse(random)), float(coarse(random)));
         const uint32_t primitive = 0xfffffff0u - uint32_t(i / 3) * 977u;
         const float half = float(i % 3);
-        references.push_back(Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
+        references.push_back(
+            Reference{AABB{lo - Vec3(half, 0.0f, 0.0f), lo + Vec3(1.0f + half, 1.0f, 1.0f)}, primitive});
     }
     std::shuffle(references.begin(), references.end(), random);
     return references;
@@ -191,7 +195,8 @@ TEST(ObjectSweep, SortsIntoTheTotalCentroidOrder) {
             builders::sort_in_centroid_order(sorted, axis);
             std::sort(expected.begin(), expected.end(), builders::CentroidOrder{axis});
             for (size_t i = 0; i < count; ++i) {
-                ASSERT_EQ(sorted[i].primitive, expected[i].primitive) << count << " references, axis " << axis << ", " << i;
+                ASSERT_EQ(sorted[i].primitive, expected[i].primitive)
+                    << count << " references, axis " << axis << ", " << i;
                 ASSERT_EQ(sorted[i].bounds, expected[i].bounds) << count << " references, axis " << axis << ", " << i;
             }
         }
@@ -271,16 +276,19 @@ TEST(ApplySplit, SweepSplitKeepsTheOrder) {
             if (!split.is_valid()) continue;
             std::sort(storage.begin(), storage.end(), builders::CentroidOrder{axis});
             const std::vector<Reference> before = storage;
-            const builders::ChildRanges children = builders::apply_split(storage, uint32_t(storage.size()), split, node.scene->triangles);
+            const builders::ChildRanges children =
+                builders::apply_split(storage, uint32_t(storage.size()), split, node.scene->triangles);
             ASSERT_EQ(children.left_count, split.left_count);
             ASSERT_EQ(children.left_count + children.right_count, before.size());
             std::vector<Reference> expected_left, expected_right;
             for (const Reference& reference : before)
-                (builders::CentroidOrder{split.axis}(reference, split.tie) ? expected_left : expected_right).push_back(reference);
+                (builders::CentroidOrder{split.axis}(reference, split.tie) ? expected_left : expected_right)
+                    .push_back(reference);
             const std::span<const Reference> left(storage.data(), children.left_count);
             const std::span<const Reference> right(storage.data() + children.left_capacity, children.right_count);
             auto same = [](std::span<const Reference> a, const std::vector<Reference>& b) {
-                return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](const Reference& x, const Reference& y) {
+                return a.size() == b.size() &&
+                       std::equal(a.begin(), a.end(), b.begin(), [](const Reference& x, const Reference& y) {
                            return x.primitive == y.primitive && x.bounds == y.bounds;
                        });
             };
@@ -303,7 +311,8 @@ TEST(SplitSearch, CandidatesStartWithTheCheapestSplit) {
             cost.overlap_penalty = overlap_penalty;
             for (TestNode& node : test_nodes()) {
                 const auto spaces = every_search_space(*node.scene, gate_alpha);
-                const builders::SplitSearch search(cost, {}, spaces, node.scene->triangles, node.scene->bounds().area());
+                const builders::SplitSearch search(cost, {}, spaces, node.scene->triangles,
+                                                   node.scene->bounds().area());
                 const ReferenceSummary summary = builders::summarize(node.references);
                 std::vector<Reference> a = node.references, b = node.references;
                 const Split cheapest = search.cheapest(a, summary, a.size());
@@ -343,7 +352,8 @@ TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
                 Split best;
                 for (const auto& space : spaces) {
                     std::vector<Reference> c = node.references;
-                    const builders::NodeContext context{c, summary, c.size() * 2, root_area, best, search.must_split(c.size())};
+                    const builders::NodeContext context{c,         summary, c.size() * 2,
+                                                        root_area, best,    search.must_split(c.size())};
                     const Split found = space->find(context, cost);
                     if (!found.is_valid()) continue;
                     if (found.cost < best.cost) best = found;
@@ -353,7 +363,9 @@ TEST(SplitSearch, CheapestPerSpaceIsEverySpacesFindCheapestFirst) {
                 for (const Split& split : per_space) {
                     EXPECT_TRUE(split.is_valid());
                     EXPECT_GE(split.cost, cheapest.cost);
-                    EXPECT_EQ(std::count_if(expected.begin(), expected.end(), [&](const Split& e) { return same_split(e, split); }), 1);
+                    EXPECT_EQ(std::count_if(expected.begin(), expected.end(),
+                                            [&](const Split& e) { return same_split(e, split); }),
+                              1);
                 }
                 ++lists;
                 with_several += per_space.size() > 1;
@@ -393,7 +405,8 @@ TEST(Lookahead, ToTheLeavesPricesOptionsByTheTreesTheDriverBuilds) {
         auto driver_tree_sah = [&](float top_share) {
             builders::DriverOptions options;
             options.lookahead_top_share = top_share;
-            builders::TopDownBuilder builder(cost, limits, every_search_space(*node.scene), node.scene->triangles, options);
+            builders::TopDownBuilder builder(cost, limits, every_search_space(*node.scene), node.scene->triangles,
+                                             options);
             return tree_sah(builder.build(node.references, capacity), cost);
         };
         const double greedy_sah = driver_tree_sah(0.0f), looked_ahead_sah = driver_tree_sah(1.0f);
@@ -483,7 +496,8 @@ TEST(Lookahead, ChoiceIsPricedByItsSubtreeAndNeverAboveTheGreedyDecision) {
                 double local = cost.leaf_cost(child.size()) * area;
                 if (child.size() > 1) {
                     const Split split = search.cheapest(child, child_summary, capacities[side]);
-                    if (split.is_valid() && (split.cost < cost.leaf_cost(child.size()) || search.must_split(child.size())))
+                    if (split.is_valid() &&
+                        (split.cost < cost.leaf_cost(child.size()) || search.must_split(child.size())))
                         local = double(split.cost) * area;
                 }
                 expected += local;
@@ -559,7 +573,8 @@ struct TreeListing {
 };
 
 void list_greedy_tree(const builders::SplitSearch& search, std::span<Reference> storage, uint32_t count,
-                      const ReferenceSummary& summary, uint32_t depth, TreeListing& listing, std::array<size_t, 3>& kinds) {
+                      const ReferenceSummary& summary, uint32_t depth, TreeListing& listing,
+                      std::array<size_t, 3>& kinds) {
     listing.boxes.push_back(summary.bounds);
     auto leaf = [&] {
         std::vector<uint32_t> triangles;
@@ -574,11 +589,13 @@ void list_greedy_tree(const builders::SplitSearch& search, std::span<Reference> 
     search.order_for_apply(storage.first(count));
     const std::optional<builders::ChildRanges> children = search.apply(storage, count, *split, summary);
     if (!children) return leaf();
-    kinds[split->kind == builders::SplitKind::spatial ? 2 : split->kind == builders::SplitKind::object_binned ? 1 : 0]++;
+    kinds[split->kind == builders::SplitKind::spatial         ? 2
+          : split->kind == builders::SplitKind::object_binned ? 1
+                                                              : 0]++;
     const std::span<Reference> left = storage.first(children->left_capacity);
     const std::span<Reference> right = storage.subspan(children->left_capacity, children->right_capacity);
-    list_greedy_tree(search, left, children->left_count, builders::summarize(left.first(children->left_count)), depth + 1,
-                     listing, kinds);
+    list_greedy_tree(search, left, children->left_count, builders::summarize(left.first(children->left_count)),
+                     depth + 1, listing, kinds);
     list_greedy_tree(search, right, children->right_count, builders::summarize(right.first(children->right_count)),
                      depth + 1, listing, kinds);
 }

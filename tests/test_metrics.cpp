@@ -67,10 +67,10 @@ struct Overlapping {
         scene.triangles = {{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}},
                            {{1, 0, -1}, {1, 0, 1}, {1, 2, 0}},
                            {{0, 0, 0.5f}, {2, 0, 0.5f}, {0, 2, 0.5f}}};
-        bvh.nodes = {inner({{0, 0, -1}, {2, 2, 1}}, 1),     // 0 root
-                     inner({{0, 0, 0}, {2, 2, 0.5f}}, 3),   // 1 N
-                     leaf({{0.5f, 0, -1}, {1, 2, 1}}, 0, 1),  // 2 B = {T1}
-                     leaf({{0, 0, 0}, {2, 2, 0}}, 1, 1),      // 3 A = {T0}
+        bvh.nodes = {inner({{0, 0, -1}, {2, 2, 1}}, 1),          // 0 root
+                     inner({{0, 0, 0}, {2, 2, 0.5f}}, 3),        // 1 N
+                     leaf({{0.5f, 0, -1}, {1, 2, 1}}, 0, 1),     // 2 B = {T1}
+                     leaf({{0, 0, 0}, {2, 2, 0}}, 1, 1),         // 3 A = {T0}
                      leaf({{0, 0, 0.5f}, {2, 2, 0.5f}}, 2, 1)};  // 4 C = {T2}
         bvh.primitives = {1, 0, 2};
     }
@@ -122,10 +122,10 @@ Bvh median_tree(const Scene& scene) {
         }
         int axis = bounds.largest_axis();
         uint32_t middle = (task.begin + task.end) / 2;
-        std::nth_element(ids.begin() + task.begin, ids.begin() + middle, ids.begin() + task.end,
-                         [&](uint32_t a, uint32_t b) {
-                             return scene.triangles[a].bounds().centroid(axis) < scene.triangles[b].bounds().centroid(axis);
-                         });
+        std::nth_element(
+            ids.begin() + task.begin, ids.begin() + middle, ids.begin() + task.end, [&](uint32_t a, uint32_t b) {
+                return scene.triangles[a].bounds().centroid(axis) < scene.triangles[b].bounds().centroid(axis);
+            });
         uint32_t first = uint32_t(bvh.nodes.size());
         bvh.nodes[task.node].first = first;
         bvh.nodes.emplace_back();

@@ -88,7 +88,8 @@ std::string violations(const Scene& scene, const std::vector<Reference>& refs, f
             problem("primitive out of range");
             return problems.str();
         }
-        if (i > 0 && refs[i].primitive < refs[i - 1].primitive) problem("not in triangle order at " + std::to_string(i));
+        if (i > 0 && refs[i].primitive < refs[i - 1].primitive)
+            problem("not in triangle order at " + std::to_string(i));
         first[refs[i].primitive + 1]++;
     }
     for (size_t i = 0; i < n; ++i) first[i + 1] += first[i];
@@ -274,7 +275,8 @@ TEST_P(PerMethod, ObjectSweepTreeOverReferencesTracesCorrectly) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Presplit, PerMethod, ::testing::Values(0, 1),
-                         [](const ::testing::TestParamInfo<int>& info) { return std::string(kMethods[info.param].name); });
+INSTANTIATE_TEST_SUITE_P(Presplit, PerMethod, ::testing::Values(0, 1), [](const ::testing::TestParamInfo<int>& info) {
+    return std::string(kMethods[info.param].name);
+});
 
 }  // namespace

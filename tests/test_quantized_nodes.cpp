@@ -66,9 +66,11 @@ double check_node(const std::vector<AABB>& boxes) {
             EXPECT_GT(q.scale[axis], 0.0f);
             const float magnitude = std::max(std::fabs(lo), std::fabs(hi));
             const double unit =
-                std::max(double(q.scale[axis]), double(std::nextafter(magnitude, std::numeric_limits<float>::infinity()) - magnitude));
+                std::max(double(q.scale[axis]),
+                         double(std::nextafter(magnitude, std::numeric_limits<float>::infinity()) - magnitude));
             if (std::isfinite(decoded.hi[axis]))
-                slack = std::max({slack, (double(lo) - double(decoded.lo[axis])) / unit, (double(decoded.hi[axis]) - double(hi)) / unit});
+                slack = std::max({slack, (double(lo) - double(decoded.lo[axis])) / unit,
+                                  (double(decoded.hi[axis]) - double(hi)) / unit});
         }
     }
     return slack;
@@ -152,7 +154,8 @@ std::vector<Ray> grazing_rays(const Scene& scene, uint64_t seed, int count) {
     const AABB bounds = scene.bounds();
     const Vec3 extent = bounds.extent();
     auto random_point = [&] {
-        return Vec3{bounds.lo.x - extent.x * 0.25f + extent.x * 1.5f * unit(rng), bounds.lo.y - extent.y * 0.25f + extent.y * 1.5f * unit(rng),
+        return Vec3{bounds.lo.x - extent.x * 0.25f + extent.x * 1.5f * unit(rng),
+                    bounds.lo.y - extent.y * 0.25f + extent.y * 1.5f * unit(rng),
                     bounds.lo.z - extent.z * 0.25f + extent.z * 1.5f * unit(rng)};
     };
     std::uniform_int_distribution<size_t> pick(0, scene.triangles.size() - 1);
@@ -199,8 +202,7 @@ std::string disagreements(const Scene& scene, uint64_t seed, int count = 300) {
         const VerificationReport c = verify_against_reference(scene, rays, closest, reference_closest, false);
         const VerificationReport o = verify_against_reference(scene, rays, occlusion, reference_occlusion, true);
         size_t single_differences = 0;
-        for (size_t i = 0; i < rays.size(); i += 7)
-        {
+        for (size_t i = 0; i < rays.size(); i += 7) {
             const HitRecord single = to_record(tracer->intersect(rays[i]));
             single_differences += single.t != closest[i].t || single.primitive != closest[i].primitive ||
                                   tracer->occluded(rays[i]) != occlusion[i].is_hit();
@@ -268,10 +270,12 @@ TEST(QuantizedKernels, HalveTheNodeBytes) {
     EXPECT_EQ(quantized->config().node_format, NodeFormat::quantized);
     EXPECT_EQ(make_tracer("bvh8q-avx2+moller@area", scene, bvh)->config().collapse, WideCollapse::largest_area);
     EXPECT_THROW(make_tracer("bvh4q", scene, bvh), Error);
-    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::bvh4, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::watertight,
-                                                 NodeFormat::quantized}),
+    EXPECT_THROW(Tracer(scene, bvh,
+                        TracerConfig{Kernel::bvh4, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::watertight,
+                                     NodeFormat::quantized}),
                  Error);
-    EXPECT_THROW(Tracer(scene, bvh, TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 0, LeafTest::watertight,
-                                                 NodeFormat::quantized}),
+    EXPECT_THROW(Tracer(scene, bvh,
+                        TracerConfig{Kernel::packet8, NodeTest::best, WideCollapse::sah_optimal, 0,
+                                     LeafTest::watertight, NodeFormat::quantized}),
                  Error);
 }

@@ -40,7 +40,9 @@ struct QVec {
 };
 QVec qv(Vec3 a) { return {q(a.x), q(a.y), q(a.z)}; }
 QVec qsub(const QVec& a, const QVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-QVec qcross(const QVec& a, const QVec& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+QVec qcross(const QVec& a, const QVec& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 mpq_class qdot(const QVec& a, const QVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 // Sign of dir . ((p - o) x (q - o)): double when it is clearly away from zero, else rationals; an exact
@@ -49,7 +51,8 @@ mpq_class qdot(const QVec& a, const QVec& b) { return a.x * b.x + a.y * b.y + a.
 int reference_edge_sign(const Ray& ray, Vec3 p, Vec3 qq) {
     const double ax = double(p.x) - ray.org.x, ay = double(p.y) - ray.org.y, az = double(p.z) - ray.org.z;
     const double bx = double(qq.x) - ray.org.x, by = double(qq.y) - ray.org.y, bz = double(qq.z) - ray.org.z;
-    const double value = ray.dir.x * (ay * bz - az * by) + ray.dir.y * (az * bx - ax * bz) + ray.dir.z * (ax * by - ay * bx);
+    const double value =
+        ray.dir.x * (ay * bz - az * by) + ray.dir.y * (az * bx - ax * bz) + ray.dir.z * (ax * by - ay * bx);
     const double size = std::fabs(ray.dir.x) * (std::fabs(ay * bz) + std::fabs(az * by)) +
                         std::fabs(ray.dir.y) * (std::fabs(az * bx) + std::fabs(ax * bz)) +
                         std::fabs(ray.dir.z) * (std::fabs(ax * by) + std::fabs(ay * bx));
@@ -100,7 +103,8 @@ std::vector<ReferenceHit> reference_hits(std::span<const Triangle> triangles, co
     for (size_t i = 0; i < ours.size(); ++i) {
         a.push_back(ours[i].primitive);
         b.push_back(reference[i].primitive);
-        if (i > 0 && (ours[i].t < ours[i - 1].t || (ours[i].t == ours[i - 1].t && ours[i].primitive < ours[i - 1].primitive)))
+        if (i > 0 &&
+            (ours[i].t < ours[i - 1].t || (ours[i].t == ours[i - 1].t && ours[i].primitive < ours[i - 1].primitive)))
             return ::testing::AssertionFailure() << "hits not sorted at " << i;
     }
     std::vector<uint32_t> sa = a, sb = b;
@@ -108,9 +112,11 @@ std::vector<ReferenceHit> reference_hits(std::span<const Triangle> triangles, co
     std::sort(sb.begin(), sb.end());
     if (sa != sb) return ::testing::AssertionFailure() << "different triangles";
     for (const QueryHit& hit : ours) {
-        const auto it = std::find_if(reference.begin(), reference.end(), [&](const ReferenceHit& r) { return r.primitive == hit.primitive; });
+        const auto it = std::find_if(reference.begin(), reference.end(),
+                                     [&](const ReferenceHit& r) { return r.primitive == hit.primitive; });
         if (std::fabs(it->t - hit.t) > 1e-9 * std::max(1.0, std::fabs(it->t)))
-            return ::testing::AssertionFailure() << "t " << hit.t << " vs exact " << it->t << " on triangle " << hit.primitive;
+            return ::testing::AssertionFailure()
+                   << "t " << hit.t << " vs exact " << it->t << " on triangle " << hit.primitive;
     }
     return ::testing::AssertionSuccess();
 }
@@ -152,7 +158,8 @@ std::vector<Ray> rays_through(std::span<const Triangle> triangles, size_t count,
 }
 
 std::vector<Ray> rays_through_vertices(std::span<const Triangle> triangles, size_t count, uint64_t seed) {
-    return rays_through(triangles, count, seed, [](const Triangle& tri, int k) -> std::optional<Vec3> { return tri.vertex(k); });
+    return rays_through(triangles, count, seed,
+                        [](const Triangle& tri, int k) -> std::optional<Vec3> { return tri.vertex(k); });
 }
 
 std::vector<Ray> rays_through_edges(std::span<const Triangle> triangles, size_t count, uint64_t seed) {
@@ -278,7 +285,7 @@ TEST(Queries, DuplicateRaysAndDuplicateTriangles) {
         for (uint64_t k = 0; k < 4; ++k) EXPECT_EQ(lists.hits[lists.offsets[i] + k].primitive, lists.hits[k].primitive);
     }
     EXPECT_EQ(lists.hits[0].primitive + n, lists.hits[1].primitive);  // equal t: by id
-    EXPECT_FALSE(queries.contains({1.5f, 1.5f, 1.5f}));  // parity: each surface counted twice
+    EXPECT_FALSE(queries.contains({1.5f, 1.5f, 1.5f}));               // parity: each surface counted twice
 }
 
 TEST(Queries, MaxHitsKeepsTheNearest) {
@@ -372,7 +379,8 @@ struct ReferenceCase {
 ReferenceCase reference_case(std::span<const Triangle> triangles, std::string what, std::vector<Ray> rays) {
     ReferenceCase c{std::move(what), std::move(rays), {}};
     c.expected.resize(c.rays.size());
-    tbb::parallel_for(size_t(0), c.rays.size(), [&](size_t i) { c.expected[i] = reference_hits(triangles, c.rays[i]); });
+    tbb::parallel_for(size_t(0), c.rays.size(),
+                      [&](size_t i) { c.expected[i] = reference_hits(triangles, c.rays[i]); });
     return c;
 }
 
@@ -391,14 +399,18 @@ void check_against_reference(const RayQueries& queries, const ReferenceCase& c, 
     size_t wrong = 0, hits = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
         const std::vector<ReferenceHit>& reference = c.expected[i];
-        const std::vector<QueryHit> ours(lists.hits.begin() + ptrdiff_t(lists.offsets[i]), lists.hits.begin() + ptrdiff_t(lists.offsets[i + 1]));
+        const std::vector<QueryHit> ours(lists.hits.begin() + ptrdiff_t(lists.offsets[i]),
+                                         lists.hits.begin() + ptrdiff_t(lists.offsets[i + 1]));
         hits += reference.size();
         const auto result = same_hits(ours, reference);
         bool ok = bool(result);
         ok = ok && counts[i] == reference.size() && bool(anys[i]) == !reference.empty();
-        ok = ok && firsts[i].is_hit() == !reference.empty() && (reference.empty() || firsts[i].primitive == ours[0].primitive);
+        ok = ok && firsts[i].is_hit() == !reference.empty() &&
+             (reference.empty() || firsts[i].primitive == ours[0].primitive);
         ok = ok && first_ids[i] == firsts[i].primitive && (reference.empty() || firsts[i].t == ours[0].t);
-        if (!ok && ++wrong <= 5) ADD_FAILURE() << c.what << "/" << tree << " ray " << i << ": " << result.message() << " count " << counts[i];
+        if (!ok && ++wrong <= 5)
+            ADD_FAILURE() << c.what << "/" << tree << " ray " << i << ": " << result.message() << " count "
+                          << counts[i];
     }
     EXPECT_EQ(wrong, 0u) << c.what << "/" << tree << ": " << rays.size() << " rays, " << hits << " reference hits";
 }
@@ -413,7 +425,8 @@ void check_scene(const Scene& scene, size_t random_rays, size_t special_rays,
     for (size_t i = 0; i < special_rays; ++i) {
         Vec3 dir{0, 0, 0};
         dir[int(i % 3)] = i % 2 ? 1.0f : -1.0f;
-        const Vec3 origin = i % 4 < 2 ? random[i % random.size()].org : scene.triangles[(i * 7919) % scene.triangles.size()].v1;
+        const Vec3 origin =
+            i % 4 < 2 ? random[i % random.size()].org : scene.triangles[(i * 7919) % scene.triangles.size()].v1;
         axis.push_back({origin, dir, 0.0f, kInfinity});
     }
     // Containment rays: from random points and from mesh vertices (points on the surface).

@@ -111,7 +111,8 @@ TEST(Reinsertion, GainsArePricedExactly) {
     EXPECT_NEAR(report.inner_area_refitted - report.inner_area_after, report.applied_gain,
                 1e-9 * report.inner_area_before);
     const double root_area = double(root_box.area());
-    const double predicted = sah_before - options.cost.traversal_cost * (report.inner_area_before - report.inner_area_after) / root_area;
+    const double predicted =
+        sah_before - options.cost.traversal_cost * (report.inner_area_before - report.inner_area_after) / root_area;
     EXPECT_NEAR(tree_sah(bvh, options.cost), predicted, 1e-6 * sah_before);
 }
 

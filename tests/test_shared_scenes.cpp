@@ -141,16 +141,19 @@ TEST_P(SharedSceneWithBuilder, AnswersAgreeWithEmbreeAndTheArbiter) {
             const VerificationReport occlusion_report =
                 verify_against_reference(c.scene, rays, occlusion, c.embree_occlusion[k], true);
             EXPECT_EQ(closest_report.ours_wrong, 0u)
-                << "closest hit; first wrong ray " << (closest_report.wrong_rays.empty() ? 0 : closest_report.wrong_rays[0]);
+                << "closest hit; first wrong ray "
+                << (closest_report.wrong_rays.empty() ? 0 : closest_report.wrong_rays[0]);
             EXPECT_EQ(occlusion_report.ours_wrong, 0u)
                 << "occlusion; first wrong ray "
                 << (occlusion_report.wrong_rays.empty() ? 0 : occlusion_report.wrong_rays[0]);
             if (std::string(kernel) != "binary") continue;
             RecordProperty(std::string("embree_wrong_") + kKindNames[k],
                            std::to_string(closest_report.reference_wrong + occlusion_report.reference_wrong));
-            std::printf("[ info ] %s, %s, %s rays: %zu rays, Embree medium wrong on %zu closest + %zu occlusion, ours %zu + %zu\n",
-                        shared.key, builder.c_str(), kKindNames[k], rays.size(), closest_report.reference_wrong,
-                        occlusion_report.reference_wrong, closest_report.ours_wrong, occlusion_report.ours_wrong);
+            std::printf(
+                "[ info ] %s, %s, %s rays: %zu rays, Embree medium wrong on %zu closest + %zu occlusion, ours %zu + "
+                "%zu\n",
+                shared.key, builder.c_str(), kKindNames[k], rays.size(), closest_report.reference_wrong,
+                occlusion_report.reference_wrong, closest_report.ours_wrong, occlusion_report.ours_wrong);
         }
     }
 }

@@ -77,7 +77,8 @@ TEST_P(SplittingBuilder, LeavesReferencingATriangleCoverAllOfIt) {
 
 // The reference budget always holds, and a triangle appears at most once per leaf.
 TEST_P(SplittingBuilder, BudgetIsHonouredAndLeavesHoldATriangleOnce) {
-    if (GetParam().find('+') != std::string::npos) GTEST_SKIP() << "the budget is the partition's; tested without +sweep";
+    if (GetParam().find('+') != std::string::npos)
+        GTEST_SKIP() << "the budget is the partition's; tested without +sweep";
     const Scene& scene = rotated_interior();
     for (float budget : {1.0f, 1.1f, 1.3f, 1.5f}) {
         if (GetParam() == "full" && budget > 1.1f) continue;  // the slowest builder: the two tightest budgets

@@ -34,7 +34,8 @@ SpatialPlaneEvaluation partition_directly(std::span<const Reference> references,
     result.left_count = ranges.left_count;
     result.right_count = ranges.right_count;
     for (uint32_t i = 0; i < ranges.left_count; ++i) result.left_bounds.extend(storage[i].bounds);
-    for (uint32_t i = 0; i < ranges.right_count; ++i) result.right_bounds.extend(storage[ranges.left_capacity + i].bounds);
+    for (uint32_t i = 0; i < ranges.right_count; ++i)
+        result.right_bounds.extend(storage[ranges.left_capacity + i].bounds);
     return result;
 }
 
@@ -116,12 +117,12 @@ TEST(SpatialSweep, EveryEventPlaneMatchesThePartitionOnRandomNodes) {
 TEST(SpatialSweep, ClippingEdgeCasesMatchThePartition) {
     Node node;
     node.triangles = {
-        {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}},              // ends at x = 1
-        {{0.5f, 0, 0}, {0.5f, 1, 0}, {0.5f, 0, 1}},     // lies in x = 0.5
+        {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}},                 // ends at x = 1
+        {{0.5f, 0, 0}, {0.5f, 1, 0}, {0.5f, 0, 1}},        // lies in x = 0.5
         {{0, 0.2f, 0.2f}, {2, 0.4f, 0.9f}, {1, 2, 0.3f}},  // straddles; vertex on x = 1 (an event)
-        {{0.25f, 0, 0}, {2, 0, 0}, {2, 0, 2}},          // lies in y = 0: flat box
-        {{1.5f, 3, 3}, {2, 3.5f, 3}, {1.75f, 3, 4}},   // starts at x = 1.5
-        {{1, -1, -1}, {1, -1, -0.5f}, {1, -0.5f, -1}},  // lies in x = 1 (the vertex plane)
+        {{0.25f, 0, 0}, {2, 0, 0}, {2, 0, 2}},             // lies in y = 0: flat box
+        {{1.5f, 3, 3}, {2, 3.5f, 3}, {1.75f, 3, 4}},       // starts at x = 1.5
+        {{1, -1, -1}, {1, -1, -0.5f}, {1, -0.5f, -1}},     // lies in x = 1 (the vertex plane)
     };
     for (uint32_t i = 0; i < node.triangles.size(); ++i) node.references.push_back({node.triangles[i].bounds(), i});
     expect_sweep_matches_brute_force(node, "edge cases");
@@ -150,7 +151,8 @@ TEST(SpatialSweep, FinderPicksTheCheapestEventAndInteriorSamplesNeverHurt) {
         const ReferenceSummary summary = summarize(node.references);
         float brute_force = kInfinity;
         for (int axis = 0; axis < 3; ++axis) {
-            const SpatialSweepPlanes sweep = sweep_spatial_planes(node.references, node.triangles, summary.bounds, axis);
+            const SpatialSweepPlanes sweep =
+                sweep_spatial_planes(node.references, node.triangles, summary.bounds, axis);
             for (float plane : sweep.planes) {
                 const SpatialPlaneEvaluation e = partition_directly(node.references, node.triangles, axis, plane);
                 if (e.left_count && e.right_count)
@@ -178,9 +180,9 @@ TEST(SpatialSweep, FinderPicksTheCheapestEventAndInteriorSamplesNeverHurt) {
 // side. Here (|L| = 10, |R| = 2, equal areas) both sides cost 72, right only 72.4, left only 98.
 TEST(SpatialSweep, SpentBudgetSendsAStraddlerToTheCheaperSide) {
     const std::vector<Triangle> triangles = {
-        {{0, 0, 0}, {0.5f, 0, 0}, {0, 1, 1}},           // left of x = 1
-        {{0.2f, 0, 0}, {1.8f, 1, 0}, {1, 0, 1}},       // straddles x = 1
-        {{1.5f, 0, 0}, {2, 1, 0}, {2, 0, 1}},           // right of x = 1
+        {{0, 0, 0}, {0.5f, 0, 0}, {0, 1, 1}},     // left of x = 1
+        {{0.2f, 0, 0}, {1.8f, 1, 0}, {1, 0, 1}},  // straddles x = 1
+        {{1.5f, 0, 0}, {2, 1, 0}, {2, 0, 1}},     // right of x = 1
     };
     std::vector<Reference> storage;
     for (uint32_t i = 0; i < triangles.size(); ++i) storage.push_back({triangles[i].bounds(), i});

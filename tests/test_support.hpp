@@ -108,7 +108,7 @@ inline bool partitions_objects(const std::string& builder) { return builder == "
 // Spatial splits: each leaf box touches its triangles, and each vertex of a triangle lies in the box
 // of a leaf that lists it. Returns "" when all hold, else a description of the first violations.
 inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const BuildConfig& options,
-                            uint32_t* depth_out = nullptr) {
+                                   uint32_t* depth_out = nullptr) {
     std::ostringstream problems;
     int reported = 0;
     auto problem = [&](const std::string& text) {
@@ -174,7 +174,8 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
             const Triangle& triangle = scene.triangles[primitive];
             if (strict) {
                 if (!node.bounds.contains(triangle.bounds()))
-                    problem("leaf " + std::to_string(index) + " does not contain triangle " + std::to_string(primitive));
+                    problem("leaf " + std::to_string(index) + " does not contain triangle " +
+                            std::to_string(primitive));
             } else if (clip_triangle_bounds(triangle, node.bounds).is_empty()) {
                 problem("leaf " + std::to_string(index) + " box misses its triangle " + std::to_string(primitive));
             }
@@ -183,7 +184,8 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
         }
     }
     if (max_depth > options.limits.max_depth)
-        problem("depth " + std::to_string(max_depth) + " exceeds max_depth " + std::to_string(options.limits.max_depth));
+        problem("depth " + std::to_string(max_depth) + " exceeds max_depth " +
+                std::to_string(options.limits.max_depth));
     for (size_t i = 0; i < reached.size(); ++i)
         if (!reached[i]) {
             problem("node " + std::to_string(i) + " unreachable");
@@ -193,8 +195,8 @@ inline std::string tree_violations(const Scene& scene, const Bvh& bvh, const Bui
         problem("leaves cover " + std::to_string(next_primitive) + " of " + std::to_string(bvh.primitives.size()) +
                 " primitive entries");
     const size_t budget = strict ? scene.triangles.size()
-                                 : std::max(scene.triangles.size(),
-                                            size_t(double(options.limits.reference_budget) * double(scene.triangles.size())));
+                                 : std::max(scene.triangles.size(), size_t(double(options.limits.reference_budget) *
+                                                                           double(scene.triangles.size())));
     if (bvh.primitives.size() > budget)
         problem(std::to_string(bvh.primitives.size()) + " references exceed the budget of " + std::to_string(budget));
     for (size_t i = 0; i < seen.size(); ++i) {
@@ -227,7 +229,7 @@ inline BuildConfig options_for_tree(const std::string& name) {
 
 // Brute-force truth for a few rays, in parallel.
 inline void arbiter_records(const Scene& scene, std::span<const Ray> rays, std::vector<HitRecord>& closest,
-                     std::vector<HitRecord>& occlusion) {
+                            std::vector<HitRecord>& occlusion) {
     closest.assign(rays.size(), {});
     occlusion.assign(rays.size(), {});
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 8), [&](const tbb::blocked_range<size_t>& range) {
@@ -298,7 +300,8 @@ struct ProgressLog {
     std::string problems() const {
         if (reports.empty()) return "no progress reports";
         for (double fraction : reports)
-            if (!(fraction >= 0.0 && fraction <= 1.0)) return "fraction " + std::to_string(fraction) + " outside [0, 1]";
+            if (!(fraction >= 0.0 && fraction <= 1.0))
+                return "fraction " + std::to_string(fraction) + " outside [0, 1]";
         if (reports.back() != 1.0) return "the last report is " + std::to_string(reports.back()) + ", not 1";
         return "";
     }
@@ -315,7 +318,8 @@ inline std::string first_difference(const Bvh& a, const Bvh& b) {
         return "primitive counts " + std::to_string(a.primitives.size()) + " vs " + std::to_string(b.primitives.size());
     static_assert(sizeof(BvhNode) == 32, "BvhNode is compared byte for byte");
     for (size_t i = 0; i < a.nodes.size(); ++i)
-        if (std::memcmp(&a.nodes[i], &b.nodes[i], sizeof(BvhNode)) != 0) return "node " + std::to_string(i) + " differs";
+        if (std::memcmp(&a.nodes[i], &b.nodes[i], sizeof(BvhNode)) != 0)
+            return "node " + std::to_string(i) + " differs";
     if (std::memcmp(a.primitives.data(), b.primitives.data(), a.primitives.size() * sizeof(uint32_t)) != 0)
         return "primitive arrays differ";
     return "";

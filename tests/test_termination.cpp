@@ -89,7 +89,8 @@ TEST(TerminationAwareBuild, ValidCorrectDeterministicAndOffBelowTheRayMinimum) {
         EXPECT_EQ(first_difference(build_in_arena(1, soup, options), bvh), "") << builder << ": 1 vs 2 threads";
         // No node is met by more segments than there are: the term never applies.
         options.termination.min_rays = uint32_t(options.termination.segments.size()) + 1;
-        EXPECT_EQ(first_difference(spacebvh::build(soup, options), spacebvh::build(soup, config_for(builder))), "") << builder;
+        EXPECT_EQ(first_difference(spacebvh::build(soup, options), spacebvh::build(soup, config_for(builder))), "")
+            << builder;
     }
 }
 
@@ -153,7 +154,8 @@ TEST(TerminationReinsertion, ValidCorrectDeterministicAndOffWithoutIterations) {
         EXPECT_EQ(wrong_against_arbiter(soup, tracer, probing_rays(soup, 1500, 17)), "") << builder;
         EXPECT_EQ(first_difference(build_in_arena(1, soup, options), bvh), "") << builder << ": 1 vs 2 threads";
         EXPECT_LT(sampled_price(bvh, options.termination.segments, 64.0f),
-                  sampled_price(plain, options.termination.segments, 64.0f)) << builder;
+                  sampled_price(plain, options.termination.segments, 64.0f))
+            << builder;
     }
 }
 
@@ -182,23 +184,29 @@ TEST_F(Cli, SampleRaysAndTerminationRays) {
     const CliResult build = run("build builtin:soup --builder cbvh --termination-rays 2000 --no-epo");
     ASSERT_EQ(build.exit_code, 0) << build.output;
     nlohmann::json rows;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tcand=2;tn0=8' --embree medium "
-                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
-                                         3, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tcand=2;tn0=8' --embree medium "
+                     "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                     3, rows));
     EXPECT_EQ(rows[1]["builder"].get<std::string>().rfind("spatial@trays=2000", 0), 0u) << rows[1];
     for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
-    expect_clean_failure("build builtin:soup --builder embree-high --termination-rays 100 --no-epo", {"termination-rays"});
-    expect_clean_failure("build builtin:soup --termination-rays 100 --termination-candidates 0 --no-epo", {"termination candidates"});
+    expect_clean_failure("build builtin:soup --builder embree-high --termination-rays 100 --no-epo",
+                         {"termination-rays"});
+    expect_clean_failure("build builtin:soup --termination-rays 100 --termination-candidates 0 --no-epo",
+                         {"termination candidates"});
     expect_clean_failure("rays builtin:soup --kind camera -o r.bin", {"camera"});
     const CliResult optimized =
-        run("build builtin:soup --builder spatial --termination-rays 2000 --no-termination-split --termination-optimize 4 --no-epo");
+        run("build builtin:soup --builder spatial --termination-rays 2000 --no-termination-split "
+            "--termination-optimize 4 --no-epo");
     ASSERT_EQ(optimized.exit_code, 0) << optimized.output;
     EXPECT_NE(optimized.output.find("spatial+topt"), std::string::npos) << optimized.output;
-    ASSERT_NO_FATAL_FAILURE(compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tsplit=0;topt=4;tprior=16' --embree medium "
-                                         "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
-                                         3, rows));
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("builtin:soup --builders 'spatial,spatial@trays=2000;tsplit=0;topt=4;tprior=16' --embree medium "
+                     "--embree-packets none --random 2000 --width 32 --height 32 --runs 1 --build-runs 1 --no-epo",
+                     3, rows));
     for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[1][kind]["wrong"], 0) << kind;
     expect_clean_failure("build builtin:soup --termination-optimize 4 --no-epo", {"termination-rays"});
-    expect_clean_failure("compare builtin:soup --builders 'spatial@topt=4' --embree none --no-epo", {"topt needs trays"});
+    expect_clean_failure("compare builtin:soup --builders 'spatial@topt=4' --embree none --no-epo",
+                         {"topt needs trays"});
     expect_clean_failure("build builtin:soup --termination-rays 10 --termination-prior -1 --no-epo", {"prior"});
 }

@@ -53,11 +53,11 @@ struct IndexedMesh {
 IndexedMesh bumpy_icosphere(int subdivisions) {
     const float p = (1.0f + std::sqrt(5.0f)) / 2.0f;
     IndexedMesh mesh;
-    mesh.vertices = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-                     {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-    mesh.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+    mesh.vertices = {{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+                     {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
+    mesh.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                   {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                  {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                  {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     for (Vec3& v : mesh.vertices) v = normalize(v);
     for (int s = 0; s < subdivisions; ++s) {
         std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
@@ -82,8 +82,8 @@ IndexedMesh bumpy_icosphere(int subdivisions) {
     for (Vec3& v : mesh.vertices) {
         const float r = 3.0f * (1.0f + 0.2f * std::sin(5.0f * v.x) * std::cos(4.0f * v.y) + 0.1f * v.z);
         Vec3 q = v * r;
-        q = {c * q.x - s * q.y, s * q.x + c * q.y, q.z};       // about z
-        q = {q.x, c2 * q.y - s2 * q.z, s2 * q.y + c2 * q.z};   // about x
+        q = {c * q.x - s * q.y, s * q.x + c * q.y, q.z};      // about z
+        q = {q.x, c2 * q.y - s2 * q.z, s2 * q.y + c2 * q.z};  // about x
         v = q + Vec3(0.25f, -0.5f, 1.0f);
     }
     return mesh;
@@ -148,9 +148,8 @@ IndexedMesh sliver_spindle(int segments) {
 // without rounding) must hit at t <= 1. (When dir was rounded the ray passes a hair beside the
 // vertex and, where it grazes a curved surface, may rightly cross it only further on: the exact
 // arbiter agrees.) Returns a description of failures.
-std::string rays_escaping(const std::vector<Vec3>& vertices,
-                          const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<Vec3>& inside,
-                          const Tracer& tracer, size_t* ray_count = nullptr) {
+std::string rays_escaping(const std::vector<Vec3>& vertices, const std::vector<std::array<uint32_t, 3>>& faces,
+                          const std::vector<Vec3>& inside, const Tracer& tracer, size_t* ray_count = nullptr) {
     std::set<std::pair<uint32_t, uint32_t>> edges;
     for (const auto& f : faces)
         for (int e = 0; e < 3; ++e) edges.insert(std::minmax(f[e], f[(e + 1) % 3]));
@@ -401,8 +400,8 @@ Scene axis_aligned_scene() {
     add_box({0, 2, 0}, {1, 3, 2});
     add_box({2.5f, 0.5f, -1}, {3, 1.5f, 0});
     Scene scene = all.scene("axis_aligned");
-    scene.triangles.push_back({{-1, -1, 0}, {4, -1, 0}, {-1, 4, 0}});   // flat in z = 0
-    scene.triangles.push_back({{5, -1, -1}, {5, 4, -1}, {5, -1, 3}});   // flat in x = 5
+    scene.triangles.push_back({{-1, -1, 0}, {4, -1, 0}, {-1, 4, 0}});           // flat in z = 0
+    scene.triangles.push_back({{5, -1, -1}, {5, 4, -1}, {5, -1, 3}});           // flat in x = 5
     scene.triangles.push_back({{-2, 0.5f, -1}, {-2, 0.5f, 2}, {-2, 3, 0.5f}});  // flat in x = -2
     return scene;
 }
@@ -434,7 +433,8 @@ TEST_P(TracerWithBuilder, AxisParallelRaysMatchTheArbiter) {
     ASSERT_TRUE(std::signbit(rays[1].dir.y) || std::signbit(rays[1].dir.z));
     for (uint32_t max_leaf : {1u, 4u}) {
         const Bvh tree = build_with(scene, GetParam(), max_leaf);
-        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "") << "max leaf " << max_leaf;
+        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "")
+            << "max leaf " << max_leaf;
     }
 }
 
@@ -442,7 +442,7 @@ TEST_P(TracerWithBuilder, AxisParallelRaysMatchTheArbiter) {
 TEST(Tracer, RayInTheSlabPlaneOfAFlatNode) {
     Scene scene;
     scene.name = "flat";
-    scene.triangles = {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}},     // 0: in z = 0
+    scene.triangles = {{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}},      // 0: in z = 0
                        {{6, -1, -1}, {6, 5, -1}, {6, 2, 3}}};  // 1: in x = 6, crossing z = 0
     const Tracer tracer(scene, build_with(scene, "binned", 1), Kernel::binary);
     for (float zero : {0.0f, -0.0f}) {
@@ -545,7 +545,9 @@ TEST(Tracer, SegmentEndsAtTheHitDistanceMatchTheArbiter) {
     scene.name = "irregular";
     for (int i = 0; i < 40; ++i) {
         const Vec3 c{10 * rng.uniform() - 5, 10 * rng.uniform() - 5, 10 * rng.uniform() - 5};
-        auto corner = [&] { return c + Vec3(3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f); };
+        auto corner = [&] {
+            return c + Vec3(3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f, 3 * rng.uniform() - 1.5f);
+        };
         scene.triangles.push_back({corner(), corner(), corner()});
     }
     const Bvh tree = build_with(scene, "binned", 2);
@@ -575,11 +577,11 @@ TEST_P(TracerWithBuilder, DegenerateTrianglesAreNeverHit) {
     Scene scene;
     scene.name = "degenerates";
     std::vector<Triangle> degenerate = {
-        {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}},                 // collinear on an axis
+        {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}},                             // collinear on an axis
         {{0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.5f}},  // a point
-        {{0, 1, 0}, {1, 2, 0}, {1, 2, 0}},                 // repeated vertex
-        {{-1, -1, -1}, {1, 1, 1}, {3, 3, 3}},              // collinear, oblique
-        {{0, 0, 1}, {0, 2, 1}, {0, 1, 1}},                 // collinear, middle vertex last
+        {{0, 1, 0}, {1, 2, 0}, {1, 2, 0}},                             // repeated vertex
+        {{-1, -1, -1}, {1, 1, 1}, {3, 3, 3}},                          // collinear, oblique
+        {{0, 0, 1}, {0, 2, 1}, {0, 1, 1}},                             // collinear, middle vertex last
     };
     for (const Triangle& t : degenerate) ASSERT_TRUE(t.is_degenerate());
     scene.triangles = degenerate;
@@ -612,7 +614,8 @@ TEST_P(TracerWithBuilder, DegenerateTrianglesAreNeverHit) {
             if (hit.is_hit() && hit.primitive != floor) ++degenerate_hits;
         }
         EXPECT_EQ(degenerate_hits, 0u) << "max leaf " << max_leaf;
-        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "") << "max leaf " << max_leaf;
+        EXPECT_EQ(disagreements_with_arbiter(scene, tree, rays, kernels_for(GetParam())), "")
+            << "max leaf " << max_leaf;
     }
     // Only degenerate triangles: nothing at all is hit.
     Scene only;
@@ -784,7 +787,8 @@ TEST(Tracer, SingleLeafRootMatchesTheArbiter) {
     SplitMix64 rng(12);
     for (int i = 0; i < 30; ++i) {
         const Vec3 c{3 * rng.uniform() - 1, 3 * rng.uniform() - 1, 3 * rng.uniform() - 2};
-        scene.triangles.push_back({c, c + Vec3(rng.uniform(), 0.1f, rng.uniform()), c + Vec3(0.2f, rng.uniform(), 0.5f)});
+        scene.triangles.push_back(
+            {c, c + Vec3(rng.uniform(), 0.1f, rng.uniform()), c + Vec3(0.2f, rng.uniform(), 0.5f)});
     }
     scene.triangles.push_back({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}});  // degenerate
     Bvh bvh;

@@ -150,7 +150,8 @@ TEST(TreeFile, SaveAndLoadAFile) {
     EXPECT_TRUE(starts_with(error_of([&] { load_bvh(missing, small_scene().triangles); }), missing + ": cannot open"));
     EXPECT_TRUE(starts_with(error_of([&] { load_bvh(dir.string(), small_scene().triangles); }), dir.string() + ":"));
     const std::string unwritable = (dir / "no" / "such" / "dir.sbvh").string();
-    EXPECT_TRUE(starts_with(error_of([&] { save_bvh(unwritable, small_tree(), small_scene().triangles); }), unwritable + ":"));
+    EXPECT_TRUE(
+        starts_with(error_of([&] { save_bvh(unwritable, small_tree(), small_scene().triangles); }), unwritable + ":"));
     fs::remove_all(dir);
 }
 
@@ -163,9 +164,11 @@ TEST(TreeFile, EveryFlippedByteFails) {
         for (const std::byte flip : {std::byte{0x01}, std::byte{0xFF}}) {
             std::vector<std::byte> damaged = bytes;
             damaged[at] ^= flip;
-            const std::string message = error_of([&] { deserialize_bvh(damaged, small_scene().triangles, "tree.sbvh"); });
+            const std::string message =
+                error_of([&] { deserialize_bvh(damaged, small_scene().triangles, "tree.sbvh"); });
             if (!starts_with(message, "tree.sbvh: ") && failures++ < 5)
-                ADD_FAILURE() << "byte " << at << " flipped by " << std::to_integer<int>(flip) << ": '" << message << "'";
+                ADD_FAILURE() << "byte " << at << " flipped by " << std::to_integer<int>(flip) << ": '" << message
+                              << "'";
         }
     }
     EXPECT_EQ(failures, 0u);
@@ -175,13 +178,14 @@ TEST(TreeFile, EveryFlippedByteFails) {
 TEST(TreeFile, EveryTruncationFails) {
     const std::vector<std::byte> bytes = serialize_bvh(small_tree(), small_scene().triangles);
     for (size_t length = 0; length < bytes.size(); ++length) {
-        const std::string message = error_of(
-            [&] { deserialize_bvh(std::span(bytes).first(length), small_scene().triangles, "tree.sbvh"); });
+        const std::string message =
+            error_of([&] { deserialize_bvh(std::span(bytes).first(length), small_scene().triangles, "tree.sbvh"); });
         ASSERT_TRUE(starts_with(message, "tree.sbvh: truncated: ")) << length << ": " << message;
     }
     const std::string nodes = std::to_string(small_tree().nodes.size());
-    EXPECT_NE(error_of([&] { deserialize_bvh(std::span(bytes).first(bytes.size() - 40), small_scene().triangles, "t"); })
-                  .find("header says " + nodes + " nodes"),
+    EXPECT_NE(error_of([&] {
+                  deserialize_bvh(std::span(bytes).first(bytes.size() - 40), small_scene().triangles, "t");
+              }).find("header says " + nodes + " nodes"),
               std::string::npos);
     std::vector<std::byte> longer = bytes;
     longer.push_back(std::byte{0});
@@ -275,7 +279,8 @@ TEST(TreeFile, CraftedBadTreesFail) {
     // A triangle dropped from its leaf (replaced by its neighbour, so the leaf lists it twice, or not).
     bad = good;
     {
-        const auto pair = std::find_if(good.nodes.begin(), good.nodes.end(), [](const BvhNode& n) { return n.reference_count >= 2; });
+        const auto pair =
+            std::find_if(good.nodes.begin(), good.nodes.end(), [](const BvhNode& n) { return n.reference_count >= 2; });
         ASSERT_NE(pair, good.nodes.end());
         bad.primitives[pair->first] = bad.primitives[pair->first + 1];
     }
@@ -315,16 +320,15 @@ TEST(TreeFile, CraftedBadTreesFail) {
     EXPECT_NO_THROW(deserialize_bvh(serialize_bvh(chain, deep.triangles), deep.triangles, "chain.sbvh"));
 }
 
-TEST(TreeFile, EmptyTreesAreNotSaved) {
-    EXPECT_THROW(serialize_bvh(Bvh{}, small_scene().triangles), Error);
-}
+TEST(TreeFile, EmptyTreesAreNotSaved) { EXPECT_THROW(serialize_bvh(Bvh{}, small_scene().triangles), Error); }
 
 // The shared scenes (../shared/scenes), when present: a few builders' trees through a file answer
 // random rays (closest hit and occlusion) exactly as the built trees do.
 TEST(TreeFile, SharedScenesRoundTripThroughAFile) {
     const fs::path scenes = fs::path(SPACEBVH_SHARED_DIR) / "scenes";
     if (!fs::exists(scenes)) GTEST_SKIP() << "no shared scenes at " << scenes;
-    const fs::path file = fs::temp_directory_path() / ("spacebvh_tree_file_shared_" + std::to_string(getpid()) + ".sbvh");
+    const fs::path file =
+        fs::temp_directory_path() / ("spacebvh_tree_file_shared_" + std::to_string(getpid()) + ".sbvh");
     size_t scenes_done = 0;
     for (const char* stem : {"bunny", "sibenik", "coffee_maker", "crytek_sponza", "living_room_3"}) {
         const fs::path path = scenes / stem / (std::string(stem) + ".obj");

@@ -240,8 +240,7 @@ TEST(Verify, CountsAndListsWrongAnswers) {
 
     // Occlusion mode uses the occlusion arbiter.
     std::vector<HitRecord> occ_ours(rays.size()), occ_ref(rays.size());
-    for (size_t i = 0; i < rays.size(); ++i)
-        occ_ours[i] = occ_ref[i] = occlusion_record(truth[i].is_hit());
+    for (size_t i = 0; i < rays.size(); ++i) occ_ours[i] = occ_ref[i] = occlusion_record(truth[i].is_hit());
     occ_ref[0] = occlusion_record(false);
     const VerificationReport occ = verify_against_reference(scene, rays, occ_ours, occ_ref, true);
     EXPECT_EQ(occ.disagreements, 1u);

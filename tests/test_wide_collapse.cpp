@@ -46,7 +46,8 @@ private:
         if (!n.is_leaf()) append_unions(frontiers(n.first), frontiers(n.first + 1), result);
         return frontiers_[node] = result;
     }
-    void append_unions(const std::vector<Frontier>& left, const std::vector<Frontier>& right, std::vector<Frontier>& out) {
+    void append_unions(const std::vector<Frontier>& left, const std::vector<Frontier>& right,
+                       std::vector<Frontier>& out) {
         for (const Frontier& a : left)
             for (const Frontier& b : right)
                 if (int(a.size() + b.size()) <= width_) {
@@ -89,13 +90,16 @@ private:
 
 // The triangles in the leaves of the wide tree the plan makes, walking its wide nodes from the root,
 // and a description of the first malformed wide node ("" if none).
-std::string walk_plan(const Scene& scene, const Bvh& bvh, const CollapsePlan& plan, int width, std::set<uint32_t>& triangles) {
+std::string walk_plan(const Scene& scene, const Bvh& bvh, const CollapsePlan& plan, int width,
+                      std::set<uint32_t>& triangles) {
     std::vector<uint32_t> stack{0};
     while (!stack.empty()) {
         const uint32_t node = stack.back();
         stack.pop_back();
         const std::vector<CollapseSlot> slots = plan.slots(node);
-        if (slots.empty() || int(slots.size()) > width) return "wide node of binary node " + std::to_string(node) + " has " + std::to_string(slots.size()) + " children";
+        if (slots.empty() || int(slots.size()) > width)
+            return "wide node of binary node " + std::to_string(node) + " has " + std::to_string(slots.size()) +
+                   " children";
         if (!bvh.nodes[node].is_leaf() && slots.size() < 2) return "inner wide node with one child";
         for (const CollapseSlot& slot : slots) {
             if (!bvh.nodes[node].bounds.contains(bvh.nodes[slot.node].bounds)) return "child box outside its parent's";
@@ -129,7 +133,8 @@ TEST(WideCollapse, SahOptimalPlanEqualsExhaustiveSearchOnSmallTrees) {
                 trace::WideCost cost;
                 cost.pack = pack;
                 cost.max_merged_leaf = 4;
-                SCOPED_TRACE(std::to_string(triangles) + " triangles, width " + std::to_string(width) + ", pack " + std::to_string(pack));
+                SCOPED_TRACE(std::to_string(triangles) + " triangles, width " + std::to_string(width) + ", pack " +
+                             std::to_string(pack));
                 const CollapsePlan plan(scene.triangles, bvh, width, WideCollapse::sah_optimal, cost);
                 const double exhaustive = ExhaustiveCollapse(scene, bvh, width, cost).cost();
                 EXPECT_NEAR(plan.cost(), exhaustive, 1e-9 * exhaustive);
@@ -185,7 +190,8 @@ uint64_t lanes_checking_order(const trace::WideLayout<W>& layout, uint32_t index
             empty_seen = true;
             continue;
         }
-        const uint64_t lanes = node.count[slot] ? node.count[slot] : lanes_checking_order(layout, node.child[slot], misordered);
+        const uint64_t lanes =
+            node.count[slot] ? node.count[slot] : lanes_checking_order(layout, node.child[slot], misordered);
         misordered += empty_seen || lanes > previous;
         previous = lanes;
         total += lanes;

@@ -24,7 +24,8 @@ void add_build_command(CLI::App& app) {
         std::string save_path;
     };
     auto options = std::make_shared<Options>();
-    CLI::App* command = app.add_subcommand("build", "build a BVH and print nodes, depth, references, bytes, SAH and EPO");
+    CLI::App* command =
+        app.add_subcommand("build", "build a BVH and print nodes, depth, references, bytes, SAH and EPO");
     command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
     options->scene.add_to(*command);
     options->build.add_to(*command);
@@ -48,8 +49,9 @@ void add_build_command(CLI::App& app) {
         std::printf("scene            %s (%zu triangles)\n", scene.name.c_str(), scene.triangles.size());
         std::printf("builder          %s, %u threads\n", bvh.builder.c_str(), options->common.effective_threads());
         std::printf("cost model       %s, max leaf %u, max depth %u, lookahead %u, reinsertion iterations %u\n",
-                    build_options.cost.describe().c_str(), build_options.limits.max_leaf_size, build_options.limits.max_depth,
-                    build_options.lookahead.depth, build_options.reinsertion.iterations);
+                    build_options.cost.describe().c_str(), build_options.limits.max_leaf_size,
+                    build_options.limits.max_depth, build_options.lookahead.depth,
+                    build_options.reinsertion.iterations);
         std::printf("build            %.1f ms\n", build_ms);
         std::printf("nodes            %zu (%zu inner, %zu leaves)\n", stats.nodes, stats.inner_nodes, stats.leaves);
         std::printf("depth            max %u, mean leaf %.2f\n", stats.max_depth, stats.mean_leaf_depth);
@@ -64,20 +66,22 @@ void add_build_command(CLI::App& app) {
         }
         const size_t peak_rss = peak_rss_bytes();
         const uint64_t estimate = estimated_build_bytes(scene, build_options);
-        std::printf("peak memory      %.1f MiB (resident, whole process); %.1f MiB at the end of the build, of which "
-                    "%.1f MiB the scene; the build's estimate %.1f MiB\n",
-                    double(peak_rss) / 1048576.0, double(build_peak_rss) / 1048576.0,
-                    double(scene.triangles.size() * sizeof(Triangle)) / 1048576.0, double(estimate) / 1048576.0);
+        std::printf(
+            "peak memory      %.1f MiB (resident, whole process); %.1f MiB at the end of the build, of which "
+            "%.1f MiB the scene; the build's estimate %.1f MiB\n",
+            double(peak_rss) / 1048576.0, double(build_peak_rss) / 1048576.0,
+            double(scene.triangles.size() * sizeof(Triangle)) / 1048576.0, double(estimate) / 1048576.0);
 
         nlohmann::json json = {{"scene", scene.name},
                                {"triangles", scene.triangles.size()},
                                {"builder", bvh.builder},
                                {"threads", options->common.effective_threads()},
-                               {"cost", {{"C_T", build_options.cost.traversal_cost},
-                                         {"C_I", build_options.cost.intersection_cost},
-                                         {"C_o", std::isinf(build_options.cost.overlap_penalty)
-                                                     ? nlohmann::json("inf")
-                                                     : nlohmann::json(build_options.cost.overlap_penalty)}}},
+                               {"cost",
+                                {{"C_T", build_options.cost.traversal_cost},
+                                 {"C_I", build_options.cost.intersection_cost},
+                                 {"C_o", std::isinf(build_options.cost.overlap_penalty)
+                                             ? nlohmann::json("inf")
+                                             : nlohmann::json(build_options.cost.overlap_penalty)}}},
                                {"lookahead_depth", build_options.lookahead.depth},
                                {"lookahead_top_share", build_options.lookahead.top_share},
                                {"reinsertion_iterations", build_options.reinsertion.iterations},

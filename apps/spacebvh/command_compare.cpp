@@ -69,22 +69,35 @@ void add_compare_command(CLI::App& app) {
     };
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand(
-        "compare", "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
+        "compare",
+        "the main job: builders and Embree side by side per scene (quality, build time, Mrays/s, correctness)");
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
-    command->add_option("--builders", options->builders, "comma-separated builders, each NAME or NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;candidates=K;top=S;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); the first is the ratio baseline")
+    command
+        ->add_option("--builders", options->builders,
+                     "comma-separated builders, each NAME or "
+                     "NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;"
+                     "candidates=K;top=S;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); "
+                     "the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();
-    command->add_option("--kernel", options->kernels, "comma-separated traversal kernels, one row each per builder: " + kernel_help())
+    command
+        ->add_option("--kernel", options->kernels,
+                     "comma-separated traversal kernels, one row each per builder: " + kernel_help())
         ->capture_default_str();
-    command->add_option("--embree-packets", options->embree_packets,
-                        "Embree qualities also traced with rtcIntersect16/rtcOccluded16 packets (rays in 4x4 tiles for primary), or 'none'")
+    command
+        ->add_option("--embree-packets", options->embree_packets,
+                     "Embree qualities also traced with rtcIntersect16/rtcOccluded16 packets (rays in 4x4 tiles for "
+                     "primary), or 'none'")
         ->capture_default_str();
-    command->add_option("--tile", options->tile, "primary rays in tile x tile blocks (what packets trace together); 0: row-major")
+    command
+        ->add_option("--tile", options->tile,
+                     "primary rays in tile x tile blocks (what packets trace together); 0: row-major")
         ->capture_default_str();
-    command->add_option("--runs", options->runs,
-                        "timed runs per measurement (the median is reported); 0: answers only, for soaks (one pass per "
-                        "measurement, itself timed, and no work-per-ray pass)")
+    command
+        ->add_option("--runs", options->runs,
+                     "timed runs per measurement (the median is reported); 0: answers only, for soaks (one pass per "
+                     "measurement, itself timed, and no work-per-ray pass)")
         ->capture_default_str();
     command->add_option("--build-runs", options->build_runs, "builds per builder (the median is reported)")
         ->capture_default_str();
@@ -138,10 +151,11 @@ void add_compare_command(CLI::App& app) {
         const SceneTransform transform = options->scene.transform();
         const CostModel cost = builders.front().options.cost;
         nlohmann::json json_scenes = nlohmann::json::array();
-        std::printf("# spacebvh compare: %u threads, C_T=%g C_I=%g (C_o per row), max leaf %u; Mrays/s = median of %d "
-                    "runs; ratios to %s\n\n",
-                    options->common.effective_threads(), cost.traversal_cost, cost.intersection_cost,
-                    options->build.max_leaf_size, options->runs, builders.front().label.c_str());
+        std::printf(
+            "# spacebvh compare: %u threads, C_T=%g C_I=%g (C_o per row), max leaf %u; Mrays/s = median of %d "
+            "runs; ratios to %s\n\n",
+            options->common.effective_threads(), cost.traversal_cost, cost.intersection_cost,
+            options->build.max_leaf_size, options->runs, builders.front().label.c_str());
 
         for (const std::string& source : sources) {
             const Scene scene = load_scene(source, transform);
@@ -176,7 +190,8 @@ void add_compare_command(CLI::App& app) {
                 Bvh bvh;
                 for (int run = 0; run < options->build_runs; ++run) {
                     const auto start = std::chrono::steady_clock::now();
-                    bvh = builders[b].saved_tree ? tree_for(options->tree, scene, build_options) : build_tree(scene, build_options);
+                    bvh = builders[b].saved_tree ? tree_for(options->tree, scene, build_options)
+                                                 : build_tree(scene, build_options);
                     build_ms.push_back(milliseconds_since(start));
                 }
                 if (builders[b].saved_tree) builders[b].label = options->tree.path + ": " + bvh.builder;
@@ -202,17 +217,20 @@ void add_compare_command(CLI::App& app) {
                         if (!tracer) tracer = tracers.emplace_back(make_tracer(name, scene, bvh)).get();
                         row.kernels[int(kind)] = tracer->name();
                         if (kind == RayKind::random && !scene.triangles.empty())
-                            row.layout_bytes_per_triangle = double(tracer->memory_bytes()) / double(scene.triangles.size());
+                            row.layout_bytes_per_triangle =
+                                double(tracer->memory_bytes()) / double(scene.triangles.size());
                         KindResult& result = row.kinds[int(kind)];
                         const auto& rays = ray_sets[int(kind)];
-                        add_measurement(result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
-                                        [tracer](auto r, auto o) { tracer->occluded(r, o); });
+                        add_measurement(
+                            result, rays, [tracer](auto r, auto h) { tracer->intersect(r, h); },
+                            [tracer](auto r, auto o) { tracer->occluded(r, o); });
                         if (options->runs > 0) count_work_per_ray(*tracer, rays, result);  // 0: answers only
                     }
                     row.peak_rss_bytes = peak_rss_bytes();
-                    row.kernel = row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
-                                     ? row.kernels[0]
-                                     : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
+                    row.kernel =
+                        row.kernels[0] == row.kernels[1] && row.kernels[1] == row.kernels[2]
+                            ? row.kernels[0]
+                            : kernels[k] + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
                     progress.update(build_share * double(rows.size()) / double(row_total));
                 }
             }
@@ -244,14 +262,17 @@ void add_compare_command(CLI::App& app) {
                 for (RayKind kind : kKinds) {
                     KindResult& result = row.kinds[int(kind)];
                     if (!packets) {
-                        add_measurement(result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect(r, h); },
-                                        [traced](auto r, auto o) { traced->occluded(r, o); });
+                        add_measurement(
+                            result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect(r, h); },
+                            [traced](auto r, auto o) { traced->occluded(r, o); });
                     } else if (kind != RayKind::primary || tiles_of_16.empty()) {
-                        add_measurement(result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect16(r, h); },
-                                        [traced](auto r, auto o) { traced->occluded16(r, o); });
+                        add_measurement(
+                            result, ray_sets[int(kind)], [traced](auto r, auto h) { traced->intersect16(r, h); },
+                            [traced](auto r, auto o) { traced->occluded16(r, o); });
                     } else {
-                        add_measurement(result, {}, [traced](auto r, auto h) { traced->intersect16(r, h); },
-                                        [traced](auto r, auto o) { traced->occluded16(r, o); });
+                        add_measurement(
+                            result, {}, [traced](auto r, auto h) { traced->intersect16(r, h); },
+                            [traced](auto r, auto o) { traced->occluded16(r, o); });
                         Measurement& tiled = measurements.back();
                         tiled.reordered = gathered(primary_row_major, tiles_of_16);
                         tiled.rays = tiled.reordered;
@@ -268,21 +289,22 @@ void add_compare_command(CLI::App& app) {
             if (verify) count_wrong_answers(scene, ray_sets, rows, our_rows);
 
             // The table.
-            std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(),
-                        scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(), parameters.width,
-                        parameters.height, ray_sets[2].size());
+            std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n",
+                        scene.name.c_str(), scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(),
+                        parameters.width, parameters.height, ray_sets[2].size());
             print_table(rows, verify, !options->no_epo);
             nlohmann::json json_rows = nlohmann::json::array();
             for (const Row& row : rows) json_rows.push_back(row_json(row, verify, !options->no_epo));
             std::printf("\npeak memory so far: %.1f MiB resident (whole process)\n\n",
                         double(peak_rss_bytes()) / (1024.0 * 1024.0));
             std::fflush(stdout);
-            json_scenes.push_back({{"scene", scene.name},
-                                   {"source", source},
-                                   {"triangles", scene.triangles.size()},
-                                   {"rays", {{"random", ray_sets[0].size()}, {"primary", ray_sets[1].size()},
-                                             {"diffuse", ray_sets[2].size()}}},
-                                   {"rows", json_rows}});
+            json_scenes.push_back(
+                {{"scene", scene.name},
+                 {"source", source},
+                 {"triangles", scene.triangles.size()},
+                 {"rays",
+                  {{"random", ray_sets[0].size()}, {"primary", ray_sets[1].size()}, {"diffuse", ray_sets[2].size()}}},
+                 {"rows", json_rows}});
         }
         write_json(options->common.json_path, {{"threads", options->common.effective_threads()},
                                                {"C_T", cost.traversal_cost},

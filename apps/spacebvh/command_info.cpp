@@ -15,7 +15,8 @@ void add_info_command(CLI::App& app) {
         CommonOptions common;
     };
     auto options = std::make_shared<Options>();
-    CLI::App* command = app.add_subcommand("info", "print a scene's triangle count, degenerate triangles, bounds and camera");
+    CLI::App* command =
+        app.add_subcommand("info", "print a scene's triangle count, degenerate triangles, bounds and camera");
     command->add_option("scene", options->source, "scene file (.obj .ply .gltf .glb) or builtin:NAME")->required();
     options->scene.add_to(*command);
     options->common.add_to(*command);
@@ -27,7 +28,8 @@ void add_info_command(CLI::App& app) {
         const AABB bounds = scene.bounds();
         const Camera camera = camera_for_scene(scene, options->source, transform);
         std::printf("scene       %s\n", scene.name.c_str());
-        std::printf("triangles   %zu (%zu degenerate: kept, never hit)\n", scene.triangles.size(), scene.degenerate_count);
+        std::printf("triangles   %zu (%zu degenerate: kept, never hit)\n", scene.triangles.size(),
+                    scene.degenerate_count);
         std::printf("bounds      (%g, %g, %g) -> (%g, %g, %g)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
                     bounds.hi.y, bounds.hi.z);
         std::printf("diagonal    %g\n", scene.diagonal());
@@ -35,12 +37,13 @@ void add_info_command(CLI::App& app) {
                     camera.target.x, camera.target.y, camera.target.z, camera.up.x, camera.up.y, camera.up.z,
                     camera.fovy_degrees);
         std::printf("load        %.1f ms\n", load_ms);
-        nlohmann::json json = {{"scene", scene.name},
-                               {"triangles", scene.triangles.size()},
-                               {"degenerate_triangles", scene.degenerate_count},
-                               {"bounds", {{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}}},
-                               {"diagonal", scene.diagonal()},
-                               {"load_ms", load_ms}};
+        nlohmann::json json = {
+            {"scene", scene.name},
+            {"triangles", scene.triangles.size()},
+            {"degenerate_triangles", scene.degenerate_count},
+            {"bounds", {{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}}},
+            {"diagonal", scene.diagonal()},
+            {"load_ms", load_ms}};
         write_json(options->common.json_path, json);
     });
 }

@@ -43,12 +43,13 @@ std::vector<TriangleSet> tree_nodes(const Scene& scene, size_t nodes, uint32_t m
     std::vector<uint32_t> subtree_size(bvh.nodes.size(), 0);
     for (size_t i = bvh.nodes.size(); i-- > 0;) {  // children come after their parent
         const BvhNode& node = bvh.nodes[i];
-        subtree_size[i] = node.is_leaf() ? node.reference_count
-                                         : subtree_size[node.first] + subtree_size[node.first + 1];
+        subtree_size[i] =
+            node.is_leaf() ? node.reference_count : subtree_size[node.first] + subtree_size[node.first + 1];
     }
     std::vector<uint32_t> candidates;
     for (uint32_t i = 0; i < bvh.nodes.size(); ++i)
-        if (!bvh.nodes[i].is_leaf() && subtree_size[i] >= min_size && subtree_size[i] <= max_size) candidates.push_back(i);
+        if (!bvh.nodes[i].is_leaf() && subtree_size[i] >= min_size && subtree_size[i] <= max_size)
+            candidates.push_back(i);
     const size_t step = std::max<size_t>(1, candidates.size() / std::max<size_t>(nodes, 1));
     std::vector<TriangleSet> sets;
     for (size_t k = 0; k < candidates.size() && sets.size() < nodes; k += step) {
@@ -86,7 +87,10 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
         {"spatial (kd planes)*", uint32_t(SearchSpace::spatial_binned), false, {}},
         {"grid, no splitting", uint32_t(SearchSpace::grid), false, {}},
         {"grid + splitting*", uint32_t(SearchSpace::grid), true, {}},
-        {"full: object+spatial+grid*", SearchSpace::object_sweep | SearchSpace::spatial_binned | SearchSpace::grid, true, {}},
+        {"full: object+spatial+grid*",
+         SearchSpace::object_sweep | SearchSpace::spatial_binned | SearchSpace::grid,
+         true,
+         {}},
     };
     double optimum_sum = 0, leaf_sum = 0;
     size_t feasible = 0;
@@ -124,11 +128,15 @@ nlohmann::json report(const char* label, const std::vector<TriangleSet>& sets, c
         mean = n ? mean / double(n) : 0.0;
         const double middle = median(row.ratios);
         std::printf("  %-28s %10.3f %10.3f %10.3f %10.3f %8.1f%% %8.1f%% %10zu\n", row.name.c_str(),
-                    n ? row.cost_sum / double(n) : 0.0, mean, middle, worst, n ? 100.0 * double(row.at_optimum) / double(n) : 0.0,
+                    n ? row.cost_sum / double(n) : 0.0, mean, middle, worst,
+                    n ? 100.0 * double(row.at_optimum) / double(n) : 0.0,
                     n ? 100.0 * double(row.below_optimum) / double(n) : 0.0, row.infeasible);
-        json["search_spaces"][row.name] = {{"mean_ratio", mean},          {"median_ratio", middle},
-                                           {"max_ratio", worst},          {"at_optimum", row.at_optimum},
-                                           {"below_optimum", row.below_optimum}, {"infeasible", row.infeasible},
+        json["search_spaces"][row.name] = {{"mean_ratio", mean},
+                                           {"median_ratio", middle},
+                                           {"max_ratio", worst},
+                                           {"at_optimum", row.at_optimum},
+                                           {"below_optimum", row.below_optimum},
+                                           {"infeasible", row.infeasible},
                                            {"ratios", row.ratios}};  // per node, for the distribution
     }
     return json;
@@ -149,11 +157,13 @@ void add_optimum_command(CLI::App& app) {
     auto options = std::make_shared<Options>();
     CLI::App* command = app.add_subcommand(
         "optimum", "each search space's best split against the exhaustive optimum (all 2^N partitions) on small nodes");
-    command->add_option("scene", options->source, "also sample small nodes from this scene's cbvh tree (file or builtin:NAME)");
+    command->add_option("scene", options->source,
+                        "also sample small nodes from this scene's cbvh tree (file or builtin:NAME)");
     command->add_option("--nodes", options->nodes, "nodes per set")->capture_default_str();
     command->add_option("--min-refs", options->min_size, "smallest node")->capture_default_str();
-    command->add_option("--max-refs", options->max_size,
-                        "largest node (at most " + std::to_string(kMaxExhaustiveTriangles) + ")")
+    command
+        ->add_option("--max-refs", options->max_size,
+                     "largest node (at most " + std::to_string(kMaxExhaustiveTriangles) + ")")
         ->capture_default_str();
     command->add_option("--seed", options->seed, "seed of the random nodes")->capture_default_str();
     options->scene.add_to(*command);
@@ -167,10 +177,13 @@ void add_optimum_command(CLI::App& app) {
                         std::to_string(kMaxExhaustiveTriangles));
         const BuildConfig base = options->build.options("cbvh");
         std::printf("Best local split cost of each search space / the exhaustive optimum over all partitions\n");
-        std::printf("(x = ratio; * = clips references, so it may go below the partition optimum; grid G = ceil(%g N^(1/6)) <= %u)\n",
-                    base.grid.resolution, base.grid.max_cells);
+        std::printf(
+            "(x = ratio; * = clips references, so it may go below the partition optimum; grid G = ceil(%g N^(1/6)) <= "
+            "%u)\n",
+            base.grid.resolution, base.grid.max_cells);
         nlohmann::json json;
-        json["random"] = report("random nodes", random_nodes(options->nodes, options->min_size, options->max_size, options->seed), base);
+        json["random"] = report(
+            "random nodes", random_nodes(options->nodes, options->min_size, options->max_size, options->seed), base);
         if (!options->source.empty()) {
             const Scene scene = load_scene(options->source, options->scene.transform());
             json["scene"] = report(("nodes of " + scene.name + "'s cbvh tree").c_str(),

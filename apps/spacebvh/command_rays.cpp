@@ -22,11 +22,17 @@ void add_rays_command(CLI::App& app) {
         CommonOptions common;
     };
     auto options = std::make_shared<Options>();
-    CLI::App* command = app.add_subcommand("rays", "generate a ray set (random, primary, diffuse, or a bounce or area sample) as a ray file");
+    CLI::App* command = app.add_subcommand(
+        "rays", "generate a ray set (random, primary, diffuse, or a bounce or area sample) as a ray file");
     command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
-    command->add_option("--kind,-k", options->kind, "random, primary, diffuse, bounce (bounces off random rays' hits) or area (bounces off area-weighted surface points)")->capture_default_str();
+    command
+        ->add_option("--kind,-k", options->kind,
+                     "random, primary, diffuse, bounce (bounces off random rays' hits) or area (bounces off "
+                     "area-weighted surface points)")
+        ->capture_default_str();
     command->add_option("--count,-n", options->count, "number of random, bounce or area rays")->capture_default_str();
-    command->add_option("--seed", options->seed, "splitmix64 seed (random, diffuse, bounce, area)")->capture_default_str();
+    command->add_option("--seed", options->seed, "splitmix64 seed (random, diffuse, bounce, area)")
+        ->capture_default_str();
     command->add_option("--epsilon", options->epsilon, "bounce origin offset (default 1e-4 x scene diagonal)");
     command->add_option("--output,-o", options->output, "ray file to write")->required();
     options->scene.add_to(*command);
@@ -41,13 +47,15 @@ void add_rays_command(CLI::App& app) {
             const Scene scene = load_scene(options->source, transform);
             const Bvh tree = sample == SampleKind::bounce ? spacebvh::build(scene, BuildConfig{}) : Bvh{};
             const Tracer tracer(scene, tree, Kernel::binary);
-            const std::vector<Ray> rays = generate_sample_rays(sample, scene, tracer, options->count, options->seed, options->epsilon);
+            const std::vector<Ray> rays =
+                generate_sample_rays(sample, scene, tracer, options->count, options->seed, options->epsilon);
             write_ray_file(options->output, rays);
             std::printf("wrote %zu %s rays to %s\n", rays.size(), to_string(sample), options->output.c_str());
             return;
         }
         if (options->kind != "random" && options->kind != "primary" && options->kind != "diffuse")
-            throw Error("--kind: unknown ray kind '" + options->kind + "' (expected random, primary, diffuse, bounce or area)");
+            throw Error("--kind: unknown ray kind '" + options->kind +
+                        "' (expected random, primary, diffuse, bounce or area)");
         const RayKind kind = parse_ray_kind(options->kind);
         const Scene scene = load_scene(options->source, transform);
         RaySetParameters parameters;

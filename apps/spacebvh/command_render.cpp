@@ -28,7 +28,8 @@ void add_render_command(CLI::App& app) {
     command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
     command->add_option("--output,-o", options->output, "PNG file to write")->required();
     command->add_flag("--heatmap", options->heatmap, "colour pixels by traversal cost, with a colour legend");
-    command->add_option("--quantity", options->quantity, "heat map quantity: work (nodes + triangles), nodes, triangles")
+    command
+        ->add_option("--quantity", options->quantity, "heat map quantity: work (nodes + triangles), nodes, triangles")
         ->capture_default_str();
     command->add_option("--scale-max", options->scale_max,
                         "fixed top of the heat map's colour scale (default: the 99th percentile of this picture)");
@@ -51,7 +52,8 @@ void add_render_command(CLI::App& app) {
         const uint32_t width = options->camera.width, height = options->camera.height;
         if (!options->heatmap) {
             write_png(options->output, render_shaded(scene, tracer, camera, width, height));
-            std::printf("wrote %s (%ux%u, shaded, builder %s)\n", options->output.c_str(), width, height, bvh.builder.c_str());
+            std::printf("wrote %s (%ux%u, shaded, builder %s)\n", options->output.c_str(), width, height,
+                        bvh.builder.c_str());
             return;
         }
         HeatmapOptions heatmap;
@@ -60,12 +62,13 @@ void add_render_command(CLI::App& app) {
         HeatmapInfo info;
         write_png(options->output, render_heatmap(scene, tracer, camera, width, height, &info, heatmap));
         const double pixels = double(width) * height;
-        std::printf("wrote %s (%ux%u heat map of %s, builder %s, %s): mean %.1f, max %llu, colour scale top %.1f; "
-                    "per ray %.2f nodes, %.2f triangles\n",
-                    options->output.c_str(), width, height, options->quantity.c_str(), bvh.builder.c_str(),
-                    (options->tree.given() ? bvh.cost : build_options.cost).describe().c_str(), info.mean_value, (unsigned long long)info.max_value,
-                    info.scale_max, double(info.totals.nodes_visited) / pixels,
-                    double(info.totals.triangles_tested) / pixels);
+        std::printf(
+            "wrote %s (%ux%u heat map of %s, builder %s, %s): mean %.1f, max %llu, colour scale top %.1f; "
+            "per ray %.2f nodes, %.2f triangles\n",
+            options->output.c_str(), width, height, options->quantity.c_str(), bvh.builder.c_str(),
+            (options->tree.given() ? bvh.cost : build_options.cost).describe().c_str(), info.mean_value,
+            (unsigned long long)info.max_value, info.scale_max, double(info.totals.nodes_visited) / pixels,
+            double(info.totals.triangles_tested) / pixels);
         write_json(options->common.json_path, {{"output", options->output},
                                                {"builder", bvh.builder},
                                                {"mean", info.mean_value},

@@ -60,11 +60,16 @@ void add_trace_command(CLI::App& app) {
         const double trace_ms = milliseconds_since(start);
         for (const HitRecord& record : records) hit_count += record.is_hit();
         write_hit_file(options->hits_path, records);
-        std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s), kernel %s\n", rays.size(), hit_count,
-                    options->occlusion ? "occluded" : "hits", trace_ms, double(rays.size()) / trace_ms / 1000.0,
-                    options->common.effective_threads(), bvh.builder.c_str(), cost.describe().c_str(), tracer.name().c_str());
+        std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s), kernel %s\n", rays.size(),
+                    hit_count, options->occlusion ? "occluded" : "hits", trace_ms,
+                    double(rays.size()) / trace_ms / 1000.0, options->common.effective_threads(), bvh.builder.c_str(),
+                    cost.describe().c_str(), tracer.name().c_str());
         if (options->tree.given()) std::printf("tree loaded from %s in %.1f ms\n", options->tree.path.c_str(), tree_ms);
-        nlohmann::json json = {{"rays", rays.size()}, {"hits", hit_count}, {"trace_ms", trace_ms}, {"builder", bvh.builder}, {"kernel", tracer.name()}};
+        nlohmann::json json = {{"rays", rays.size()},
+                               {"hits", hit_count},
+                               {"trace_ms", trace_ms},
+                               {"builder", bvh.builder},
+                               {"kernel", tracer.name()}};
         json[options->tree.given() ? "tree_load_ms" : "build_ms"] = tree_ms;
         if (options->stats && !rays.empty()) {
             const double n = double(rays.size());
@@ -73,8 +78,8 @@ void add_trace_command(CLI::App& app) {
             json["nodes_per_ray"] = double(stats.nodes_visited) / n;
             json["triangles_per_ray"] = double(stats.triangles_tested) / n;
             if (stats.exact_tests || stats.plane_distances) {
-                std::printf("per ray: %.4f exact tests, %.4f double-precision distances\n", double(stats.exact_tests) / n,
-                            double(stats.plane_distances) / n);
+                std::printf("per ray: %.4f exact tests, %.4f double-precision distances\n",
+                            double(stats.exact_tests) / n, double(stats.plane_distances) / n);
                 json["exact_tests_per_ray"] = double(stats.exact_tests) / n;
                 json["plane_distances_per_ray"] = double(stats.plane_distances) / n;
             }

@@ -14,5 +14,4 @@ void add_render_command(CLI::App& app);
 void add_compare_command(CLI::App& app);
 void add_optimum_command(CLI::App& app);
 
-
 }  // namespace spacebvh::cli

@@ -8,7 +8,8 @@
 
 namespace spacebvh::cli::compare {
 
-void measure_round_robin(std::vector<Measurement>& measurements, int runs, const std::function<void(double)>& progress) {
+void measure_round_robin(std::vector<Measurement>& measurements, int runs,
+                         const std::function<void(double)>& progress) {
     const size_t total = measurements.size() * 2 * size_t(runs + 1);
     size_t done = 0;
     std::vector<Hit> hits;
@@ -19,8 +20,10 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs, const
             throw_if_interrupted();
             hits.resize(occlusion ? 0 : measurement.rays.size());
             occluded.resize(occlusion ? measurement.rays.size() : 0);
-            if (occlusion) measurement.occluded(measurement.rays, occluded);
-            else measurement.intersect(measurement.rays, hits);
+            if (occlusion)
+                measurement.occluded(measurement.rays, occluded);
+            else
+                measurement.intersect(measurement.rays, hits);
             progress(double(++done) / double(total));
         };
         std::vector<std::vector<double>> ms(measurements.size());

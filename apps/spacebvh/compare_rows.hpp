@@ -26,14 +26,14 @@ struct KindResult {
     // found, so the two differ by what early termination saves); -1: not measured (Embree, or --runs 0).
     double nodes_per_ray = -1, triangles_per_ray = -1;
     double occlusion_nodes_per_ray = -1, occlusion_triangles_per_ray = -1;
-    size_t wrong = 0;                                    // closest + occlusion answers the arbiter rejects
+    size_t wrong = 0;  // closest + occlusion answers the arbiter rejects
     std::vector<HitRecord> closest, occlusion;
     std::vector<double> closest_ms, occlusion_ms;  // every timed run, in round-robin order (spread of the median)
 };
 
 struct Row {
     std::string name;
-    std::string kernel;  // the kernel column: one name, or the per-kind choice of "auto"
+    std::string kernel;      // the kernel column: one name, or the per-kind choice of "auto"
     std::string kernels[3];  // per ray kind
     double build_ms = 0;
     std::vector<double> build_ms_runs;
@@ -51,7 +51,7 @@ struct Row {
 // the primary rays in 4x4 tiles): answer i belongs to ray order[i].
 struct Measurement {
     KindResult* result;
-    std::span<const Ray> rays;  // the kind's ray set, or `reordered`
+    std::span<const Ray> rays;   // the kind's ray set, or `reordered`
     std::vector<Ray> reordered;  // its own order of the rays, when it has one (its buffer survives moves)
     std::vector<uint32_t> order;
     std::function<void(std::span<const Ray>, std::span<Hit>)> intersect;

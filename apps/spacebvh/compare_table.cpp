@@ -50,8 +50,8 @@ void print_table(const std::vector<Row>& rows, bool verified, bool with_epo) {
             const KindResult& k = row.kinds[int(kind)];
             const KindResult& bk = base.kinds[int(kind)];
             const std::string boxes = k.nodes_per_ray < 0 ? "-"
-                                      : number_or_dash(k.nodes_per_ray, 1) + " (" +
-                                            number_or_dash(k.occlusion_nodes_per_ray, 1) + ")";
+                                                          : number_or_dash(k.nodes_per_ray, 1) + " (" +
+                                                                number_or_dash(k.occlusion_nodes_per_ray, 1) + ")";
             std::printf(" %s | %s | %s |", ratio_text(k.closest_mrays, bk.closest_mrays, 2).c_str(),
                         ratio_text(k.occlusion_mrays, bk.occlusion_mrays, 2).c_str(), boxes.c_str());
             wrong += k.wrong;
@@ -61,7 +61,8 @@ void print_table(const std::vector<Row>& rows, bool verified, bool with_epo) {
     std::printf("\nlayout B/tri (nodes + leaf triangles; Embree: its commit's allocations):");
     for (const Row& row : rows)
         if (row.layout_bytes_per_triangle >= 0)
-            std::printf(" %s %s %.1f;", row.name.c_str(), row.kernels[0].empty() ? row.kernel.c_str() : row.kernels[0].c_str(),
+            std::printf(" %s %s %.1f;", row.name.c_str(),
+                        row.kernels[0].empty() ? row.kernel.c_str() : row.kernels[0].c_str(),
                         row.layout_bytes_per_triangle);
     std::printf("\n");
 }

@@ -8,7 +8,8 @@
 #include "spacebvh/error.hpp"
 
 int main(int argc, char** argv) {
-    CLI::App app{"spacebvh: BVHs by space subdivision (Popov et al. 2009) - build, trace, measure, compare with Embree"};
+    CLI::App app{
+        "spacebvh: BVHs by space subdivision (Popov et al. 2009) - build, trace, measure, compare with Embree"};
     app.require_subcommand(1);
     app.set_help_all_flag("--help-all", "help for every subcommand");
     spacebvh::cli::add_info_command(app);
@@ -27,7 +28,8 @@ int main(int argc, char** argv) {
             names += (names.empty() ? "" : ", ") + command->get_name();
         }
         if (!known) {
-            std::fprintf(stderr, "spacebvh: error: unknown command '%s' (commands: %s; see --help)\n", argv[1], names.c_str());
+            std::fprintf(stderr, "spacebvh: error: unknown command '%s' (commands: %s; see --help)\n", argv[1],
+                         names.c_str());
             return 2;
         }
     }

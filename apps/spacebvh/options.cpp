@@ -59,8 +59,10 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     }
     command.add_option("--ct", traversal_cost, "C_T, cost of a traversal step")->capture_default_str();
     command.add_option("--ci", intersection_cost, "C_I, cost of a triangle test")->capture_default_str();
-    command.add_option("--leaf-block", leaf_block,
-                       "B: the SAH counts references in whole blocks of B (power of two; 4 = the kernels' packs of four, as Embree's SAH; 1 = plain SAH)")
+    command
+        .add_option("--leaf-block", leaf_block,
+                    "B: the SAH counts references in whole blocks of B (power of two; 4 = the kernels' packs of four, "
+                    "as Embree's SAH; 1 = plain SAH)")
         ->capture_default_str();
     command.add_option("--co", overlap_penalty,
                        "C_o, overlap penalty (0 = plain SAH, inf = disjoint children only; default: the builder's)");
@@ -68,7 +70,8 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
         ->capture_default_str();
     command.add_option("--max-depth", max_depth, "deepest level; nodes there become leaves")->capture_default_str();
     command.add_option("--bins", bins, "bins per axis of the binned object search space")->capture_default_str();
-    command.add_option("--spatial-bins", spatial_bins, "bins per axis of the spatial search space")->capture_default_str();
+    command.add_option("--spatial-bins", spatial_bins, "bins per axis of the spatial search space")
+        ->capture_default_str();
     command.add_option("--budget", reference_budget, "reference budget of spatial splits, x triangles")
         ->capture_default_str();
     command.add_option("--memory-limit", memory_limit,
@@ -82,60 +85,73 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
                        "search spaces combined at every node, any union of: object (exact SAH sweep), binned "
                        "(binned object SAH), spatial (kd planes, clipping), grid (child boxes on a grid); "
                        "e.g. object,spatial,grid (default: the builder's own)");
-    command.add_option("--grid-resolution", grid_resolution,
-                       "R of the grid search space: G = ceil(R * N^(1/6)) cells per axis for a node of N references")
+    command
+        .add_option("--grid-resolution", grid_resolution,
+                    "R of the grid search space: G = ceil(R * N^(1/6)) cells per axis for a node of N references")
         ->capture_default_str();
     command.add_option("--grid-max", grid_max_cells, "largest G of the grid search space (work per node ~26 G^6)")
         ->capture_default_str();
     command.add_flag("--no-grid-splitting", no_grid_splitting,
                      "grid search space without primitive splitting (a reference in neither child box is infeasible)");
-    command.add_option("--lookahead", lookahead,
-                       "recursive cost evaluation: choose each split by the SAH of the subtree built this many levels "
-                       "below it (0 = greedy; slower, about 1 + depth x candidates times the search)")
+    command
+        .add_option("--lookahead", lookahead,
+                    "recursive cost evaluation: choose each split by the SAH of the subtree built this many levels "
+                    "below it (0 = greedy; slower, about 1 + depth x candidates times the search)")
         ->capture_default_str();
-    command.add_option("--lookahead-candidates", lookahead_candidates,
-                       "candidates the lookahead compares: the cheapest splits per axis and search space")
+    command
+        .add_option("--lookahead-candidates", lookahead_candidates,
+                    "candidates the lookahead compares: the cheapest splits per axis and search space")
         ->capture_default_str();
-    command.add_option("--lookahead-top", lookahead_top,
-                       "recursive cost evaluation to the leaves at the top of the tree: nodes holding at least this "
-                       "share of the root's references take the search space whose cheapest split leads to the "
-                       "subtree of lowest SAH, each built out greedily (0 = off; about one build per search space "
-                       "and level of such nodes)")
+    command
+        .add_option("--lookahead-top", lookahead_top,
+                    "recursive cost evaluation to the leaves at the top of the tree: nodes holding at least this "
+                    "share of the root's references take the search space whose cheapest split leads to the "
+                    "subtree of lowest SAH, each built out greedily (0 = off; about one build per search space "
+                    "and level of such nodes)")
         ->capture_default_str();
-    command.add_flag("--spatial-sweep", spatial_sweep,
-                     "kd planes at every reference bound with exact child boxes (the sweep) instead of --spatial-bins bins");
-    command.add_option("--sweep-samples", sweep_samples,
-                       "spatial sweep: positions sampled inside the intervals next to the best event planes (0 = events only)")
+    command.add_flag(
+        "--spatial-sweep", spatial_sweep,
+        "kd planes at every reference bound with exact child boxes (the sweep) instead of --spatial-bins bins");
+    command
+        .add_option(
+            "--sweep-samples", sweep_samples,
+            "spatial sweep: positions sampled inside the intervals next to the best event planes (0 = events only)")
         ->capture_default_str();
-    command.add_option("--termination-rays", termination_rays,
-                       "termination-aware split choice: trace this many bounce rays on a quick tree and choose splits "
-                       "by the share of their segments (each ending at its first hit) that meets each child, where "
-                       "at least 8 reach a node (0 = off)")
+    command
+        .add_option("--termination-rays", termination_rays,
+                    "termination-aware split choice: trace this many bounce rays on a quick tree and choose splits "
+                    "by the share of their segments (each ending at its first hit) that meets each child, where "
+                    "at least 8 reach a node (0 = off)")
         ->capture_default_str();
-    command.add_option("--termination-shrinkage", termination_shrinkage,
-                       "n_0 of the blend: a node met by n segments weighs the sampled cost n / (n + n_0)")
+    command
+        .add_option("--termination-shrinkage", termination_shrinkage,
+                    "n_0 of the blend: a node met by n segments weighs the sampled cost n / (n + n_0)")
         ->capture_default_str();
-    command.add_option("--termination-candidates", termination_candidates,
-                       "cheapest splits per axis and search space the termination-aware cost chooses among")
+    command
+        .add_option("--termination-candidates", termination_candidates,
+                    "cheapest splits per axis and search space the termination-aware cost chooses among")
         ->capture_default_str();
     command.add_flag("--no-termination-split", no_termination_split,
                      "the termination rays serve --termination-optimize only; the cost model chooses every split");
-    command.add_option("--termination-optimize", termination_optimize,
-                       "after the build, this many reinsertion iterations that price each inner node by the "
-                       "termination rays' segments meeting its box plus --termination-prior pseudo-rays spread by "
-                       "area (needs --termination-rays; 0 = off)")
+    command
+        .add_option("--termination-optimize", termination_optimize,
+                    "after the build, this many reinsertion iterations that price each inner node by the "
+                    "termination rays' segments meeting its box plus --termination-prior pseudo-rays spread by "
+                    "area (needs --termination-rays; 0 = off)")
         ->capture_default_str();
-    command.add_option("--termination-prior", termination_prior,
-                       "--termination-optimize: pseudo-rays spread by area (the SAH's share of the price)")
+    command
+        .add_option("--termination-prior", termination_prior,
+                    "--termination-optimize: pseudo-rays spread by area (the SAH's share of the price)")
         ->capture_default_str();
     command.add_flag("--optimize", optimize,
                      "after the build, move subtrees to where they lower the tree SAH (reinsertion, Bittner et al. "
                      "2013); leaves stay as built; also as a builder name suffix: binned+opt");
     optimize_iterations_option =
         command
-            .add_option("--optimize-iterations", optimize_iterations,
-                         "effort of --optimize (implies it): at most this many batches of moves, each searching 5 % of "
-                         "the nodes (the largest not yet settled); it stops earlier once 20 batches in a row gain < 0.01 %")
+            .add_option(
+                "--optimize-iterations", optimize_iterations,
+                "effort of --optimize (implies it): at most this many batches of moves, each searching 5 % of "
+                "the nodes (the largest not yet settled); it stops earlier once 20 batches in a row gain < 0.01 %")
             ->capture_default_str();
 }
 
@@ -164,7 +180,8 @@ uint64_t parse_bytes(const std::string& text, const char* what) {
     const std::string_view unit(end, text.data() + text.size());
     const size_t power = unit.empty() ? 0 : unit.size() == 1 ? kUnits.find(char(std::toupper(unit[0]))) + 1 : 0;
     if (ec != std::errc() || !(value > 0) || (!unit.empty() && power == 0) || !std::isfinite(value))
-        throw Error(std::string(what) + ": expected a positive size in bytes, or with K, M, G or T, got '" + text + "'");
+        throw Error(std::string(what) + ": expected a positive size in bytes, or with K, M, G or T, got '" + text +
+                    "'");
     const double bytes = std::ldexp(value, int(10 * power));
     if (bytes >= 0x1p64) throw Error(std::string(what) + ": '" + text + "' is more than 2^64 bytes");
     return uint64_t(bytes);
@@ -217,7 +234,8 @@ TreeRecipe BuildCliOptions::options(const std::string& builder_text) const {
 void CommonOptions::add_to(CLI::App& command) {
     command.add_option("--threads,-j", threads, "worker threads (0 = all cores)")->capture_default_str();
     command.add_flag("--quiet,-q", quiet, "no progress bar");
-    command.add_flag("--progress", progress, "show progress even when stderr is not a terminal (a line every few seconds)");
+    command.add_flag("--progress", progress,
+                     "show progress even when stderr is not a terminal (a line every few seconds)");
     command.add_option("--json", json_path, "also write the results as JSON to this file");
 }
 
@@ -232,8 +250,9 @@ unsigned CommonOptions::effective_threads() const {
 }
 
 void CameraOptions::add_to(CLI::App& command) {
-    command.add_option("--camera", camera, "eye, target, up, fovy: ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy "
-                                           "(default: the scene's MANIFEST camera, else the spec's default)");
+    command.add_option("--camera", camera,
+                       "eye, target, up, fovy: ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy "
+                       "(default: the scene's MANIFEST camera, else the spec's default)");
     command.add_option("--width", width, "image width in pixels")->capture_default_str();
     command.add_option("--height", height, "image height in pixels")->capture_default_str();
 }
@@ -276,7 +295,8 @@ Bvh build_tree(const Scene& scene, const TreeRecipe& options) {
 }
 
 uint64_t estimated_build_bytes(const Scene& scene, const TreeRecipe& recipe) {
-    if (is_embree_tree(recipe.builder)) return estimate_embree_tree_memory(scene.triangles.size(), recipe.builder, recipe);
+    if (is_embree_tree(recipe.builder))
+        return estimate_embree_tree_memory(scene.triangles.size(), recipe.builder, recipe);
     return estimate_build_memory(scene.triangles.size(), recipe).bytes;
 }
 
@@ -291,7 +311,9 @@ std::string builder_list() {
 std::string kernel_help() {
     std::string help = "traversal kernel:";
     for (const std::string& name : kernel_names()) help += " " + name;
-    return help + " (auto: bvh8 with the widest node test); wide kernels collapse the binary tree SAH-optimally, NAME@area as Embree does (open the largest child)";
+    return help +
+           " (auto: bvh8 with the widest node test); wide kernels collapse the binary tree SAH-optimally, NAME@area as "
+           "Embree does (open the largest child)";
 }
 
 }  // namespace spacebvh::cli

@@ -18,9 +18,12 @@ namespace {
 std::string duration_text(double seconds) {
     char text[32];
     const long whole = long(seconds + 0.5);
-    if (whole < 60) std::snprintf(text, sizeof text, "%lds", whole);
-    else if (whole < 3600) std::snprintf(text, sizeof text, "%ldm%02lds", whole / 60, whole % 60);
-    else std::snprintf(text, sizeof text, "%ldh%02ldm", whole / 3600, (whole % 3600) / 60);
+    if (whole < 60)
+        std::snprintf(text, sizeof text, "%lds", whole);
+    else if (whole < 3600)
+        std::snprintf(text, sizeof text, "%ldm%02lds", whole / 60, whole % 60);
+    else
+        std::snprintf(text, sizeof text, "%ldh%02ldm", whole / 3600, (whole % 3600) / 60);
     return text;
 }
 
@@ -43,8 +46,8 @@ void Progress::update(double fraction) {
     std::lock_guard lock(mutex_);
     fraction = std::clamp(fraction, 0.0, 1.0);
     // The ETA assumes the rest goes at the average rate so far.
-    const std::string left = fraction > 0.01 ? "~" + duration_text(elapsed * (1.0 - fraction) / fraction) + " left"
-                                             : "estimating time left";
+    const std::string left =
+        fraction > 0.01 ? "~" + duration_text(elapsed * (1.0 - fraction) / fraction) + " left" : "estimating time left";
     if (terminal_) {
         constexpr int kWidth = 30;
         const int filled = int(fraction * kWidth);

@@ -20,6 +20,7 @@ struct RaySetParameters {
 };
 
 // Diffuse rays start where primary rays hit, so they need a tracer for the primary hits.
-std::vector<Ray> make_ray_set(RayKind kind, const Scene& scene, const Tracer& tracer, const RaySetParameters& parameters);
+std::vector<Ray> make_ray_set(RayKind kind, const Scene& scene, const Tracer& tracer,
+                              const RaySetParameters& parameters);
 
 }  // namespace spacebvh::cli

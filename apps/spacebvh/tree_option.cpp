@@ -22,15 +22,17 @@ Bvh tree_for(const TreeOption& tree, const Scene& scene, const TreeRecipe& optio
 
 std::string build_settings_text(const TreeRecipe& options) {
     std::ostringstream text;
-    text << "builder=" << options.builder << " " << options.cost.describe() << " max_leaf=" << options.limits.max_leaf_size
-         << " max_depth=" << options.limits.max_depth << " bins=" << options.object.bins
-         << " spatial_bins=" << options.spatial.bins << " budget=" << options.limits.reference_budget
-         << " unsplitting=" << options.spatial.unsplitting << " spatial_gate=" << options.spatial.gate_alpha
+    text << "builder=" << options.builder << " " << options.cost.describe()
+         << " max_leaf=" << options.limits.max_leaf_size << " max_depth=" << options.limits.max_depth
+         << " bins=" << options.object.bins << " spatial_bins=" << options.spatial.bins
+         << " budget=" << options.limits.reference_budget << " unsplitting=" << options.spatial.unsplitting
+         << " spatial_gate=" << options.spatial.gate_alpha
          << " search=" << (options.search_spaces ? search_space_names(options.search_spaces) : "preset")
          << " grid_resolution=" << options.grid.resolution << " grid_max=" << options.grid.max_cells
          << " grid_splitting=" << options.grid.splitting << " lookahead=" << options.lookahead.depth
          << " lookahead_candidates=" << options.lookahead.candidates << " lookahead_top=" << options.lookahead.top_share
-         << " spatial_sweep=" << options.spatial.exact_sweep << " sweep_samples=" << options.spatial.sweep_interior_samples
+         << " spatial_sweep=" << options.spatial.exact_sweep
+         << " sweep_samples=" << options.spatial.sweep_interior_samples
          << " reinsertion_iterations=" << options.reinsertion.iterations;
     return text.str();
 }

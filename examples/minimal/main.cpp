@@ -6,7 +6,7 @@
 
 int main() {
     const float vertices[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};  // a unit square at z = 0
-    const uint32_t indices[] = {0, 1, 2, 0, 2, 3};                   // as two triangles
+    const uint32_t indices[] = {0, 1, 2, 0, 2, 3};                  // as two triangles
     const spacebvh::MeshView mesh(vertices, indices);
     const spacebvh::Bvh bvh = spacebvh::build(mesh, spacebvh::Quality::balanced);
     const spacebvh::Tracer tracer(mesh, bvh);  // Kernel::automatic: the fastest on this CPU

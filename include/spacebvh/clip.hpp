@@ -4,7 +4,6 @@
 // does the EPO metric.
 #pragma once
 
-
 #include "spacebvh/geometry.hpp"
 
 namespace spacebvh {

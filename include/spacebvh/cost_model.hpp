@@ -61,8 +61,9 @@ float overlap_fraction(const AABB& node, const AABB& left, const AABB& right);
 inline float CostModel::split_cost_of_areas(float node_area, float left_area, size_t left_count, float right_area,
                                             size_t right_count, float overlap_factor) const {
     // A point or a line of primitives (SA(N) = 0): no area to divide, each reference costs one test.
-    const float weighted_area = node_area > 0.0f ? (left_area * counted(left_count) + right_area * counted(right_count)) / node_area
-                                                 : counted(left_count) + counted(right_count);
+    const float weighted_area = node_area > 0.0f
+                                    ? (left_area * counted(left_count) + right_area * counted(right_count)) / node_area
+                                    : counted(left_count) + counted(right_count);
     return traversal_cost + overlap_factor * intersection_cost * weighted_area;
 }
 

@@ -36,9 +36,7 @@ struct Vec3 {
 };
 
 constexpr float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-constexpr Vec3 cross(Vec3 a, Vec3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
+constexpr Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalize(Vec3 a) { return a / length(a); }
 constexpr Vec3 min(Vec3 a, Vec3 b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
@@ -54,8 +52,14 @@ struct AABB {
     static constexpr AABB of_point(Vec3 p) { return {p, p}; }
 
     constexpr bool is_empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
-    constexpr void extend(Vec3 p) { lo = min(lo, p); hi = max(hi, p); }
-    constexpr void extend(const AABB& b) { lo = min(lo, b.lo); hi = max(hi, b.hi); }
+    constexpr void extend(Vec3 p) {
+        lo = min(lo, p);
+        hi = max(hi, p);
+    }
+    constexpr void extend(const AABB& b) {
+        lo = min(lo, b.lo);
+        hi = max(hi, b.hi);
+    }
     constexpr Vec3 extent() const { return hi - lo; }
     constexpr Vec3 center() const { return (lo + hi) * 0.5f; }
     constexpr float centroid(int axis) const { return 0.5f * (lo[axis] + hi[axis]); }

@@ -23,10 +23,14 @@ class MeshView {
 public:
     MeshView(std::span<const Triangle> soup) : soup_(soup) {}
     MeshView(const std::vector<Triangle>& soup) : soup_(soup) {}
-    MeshView(std::span<const float> xyz, std::span<const uint32_t> indices) : float_xyz_(xyz), u32_indices_(indices), indexed_(true) {}
-    MeshView(std::span<const float> xyz, std::span<const int64_t> indices) : float_xyz_(xyz), i64_indices_(indices), indexed_(true) {}
-    MeshView(std::span<const double> xyz, std::span<const uint32_t> indices) : double_xyz_(xyz), u32_indices_(indices), indexed_(true) {}
-    MeshView(std::span<const double> xyz, std::span<const int64_t> indices) : double_xyz_(xyz), i64_indices_(indices), indexed_(true) {}
+    MeshView(std::span<const float> xyz, std::span<const uint32_t> indices)
+        : float_xyz_(xyz), u32_indices_(indices), indexed_(true) {}
+    MeshView(std::span<const float> xyz, std::span<const int64_t> indices)
+        : float_xyz_(xyz), i64_indices_(indices), indexed_(true) {}
+    MeshView(std::span<const double> xyz, std::span<const uint32_t> indices)
+        : double_xyz_(xyz), u32_indices_(indices), indexed_(true) {}
+    MeshView(std::span<const double> xyz, std::span<const int64_t> indices)
+        : double_xyz_(xyz), i64_indices_(indices), indexed_(true) {}
 
     // Names the mesh in error messages ("mesh 'bunny': triangle 7 uses vertex 90, outside 0..89").
     MeshView& named(std::string name) {

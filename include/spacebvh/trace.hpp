@@ -90,7 +90,7 @@ enum class WideCollapse {
 
 struct TracerConfig {
     Kernel kernel = Kernel::automatic;
-    NodeTest node_test = NodeTest::best;               // wide and packet kernels
+    NodeTest node_test = NodeTest::best;                // wide and packet kernels
     WideCollapse collapse = WideCollapse::sah_optimal;  // wide and packet kernels
     uint32_t packet_size = 0;  // packet kernels: rays per packet, 1..256; 0 = the kernel's tile (64, 256)
     LeafTest leaf_test = LeafTest::watertight;  // bvh4 and bvh8 only
@@ -100,8 +100,8 @@ struct TracerConfig {
 const char* to_string(Kernel kernel);          // "bvh8"
 const char* to_string(NodeTest test);          // "avx2"
 const char* to_string(WideCollapse collapse);  // "sah", "area"
-const char* to_string(LeafTest leaf_test);      // "watertight", "moller"
-const char* to_string(NodeFormat format);       // "full", "quantized"
+const char* to_string(LeafTest leaf_test);     // "watertight", "moller"
+const char* to_string(NodeFormat format);      // "full", "quantized"
 // The node tests available for `width` (4 or 8) on this CPU, "best" excluded, slowest first.
 std::vector<NodeTest> supported_node_tests(int width);
 
@@ -130,7 +130,8 @@ public:
 
     size_t memory_bytes() const;  // nodes + leaf triangle data
     size_t node_count() const;    // nodes of the layout
-    std::string name() const;     // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "bvh8q-avx2", "packet8-avx512@area"
+    std::string name() const;  // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "bvh8q-avx2",
+                               // "packet8-avx512@area"
     const TracerConfig& config() const;  // with node_test resolved
 
     struct Impl;

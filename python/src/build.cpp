@@ -15,15 +15,16 @@ using namespace spacebvh::tools;
 
 namespace {
 
-PyBvh build(const PyScene& scene, const std::string& builder, std::optional<float> overlap_penalty, float traversal_cost,
-            float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size, float reference_budget,
-            const std::string& search, uint32_t object_bins, uint32_t spatial_bins, std::optional<float> spatial_gate,
-            float lookahead_top, uint32_t optimize, int threads) {
+PyBvh build(const PyScene& scene, const std::string& builder, std::optional<float> overlap_penalty,
+            float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
+            float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
+            std::optional<float> spatial_gate, float lookahead_top, uint32_t optimize, int threads) {
     // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
     // optimiser apply to them, our search options do not.
     const bool embree_tree = is_embree_tree(builder);
     if (embree_tree && (!search.empty() || spatial_gate || lookahead_top != 0.0f))
-        throw Error("search, spatial_gate and lookahead_top apply to our builders, not to Embree's tree '" + builder + "'");
+        throw Error("search, spatial_gate and lookahead_top apply to our builders, not to Embree's tree '" + builder +
+                    "'");
     BuildConfig options = config_for(embree_tree ? "binned" : builder);
     if (!search.empty()) options.search_spaces = parse_search_spaces(search);
     options.object.bins = object_bins;
@@ -72,22 +73,29 @@ void bind_build(py::module_& m) {
         "builders",
         [] {
             std::vector<std::string> names = builder_names();
-            names.insert(names.end(), embree_tree_names().begin(), embree_tree_names().end());  // Embree 3's own binary trees
+            names.insert(names.end(), embree_tree_names().begin(),
+                         embree_tree_names().end());  // Embree 3's own binary trees
             return names;
         },
         "The builder names build() accepts (ours, then Embree 3's own binary trees).");
 
     py::class_<PyBvh>(m, "Bvh", "A binary BVH and the scene it was built over.")
-        .def_property_readonly("scene", [](const PyBvh& t) { return t.scene; }, "The scene the tree was built over.")
-        .def_property_readonly("builder", [](const PyBvh& t) { return t.bvh->builder; },
-                               "The builder's name, '+opt' when reinsertion optimised it.")
-        .def_property_readonly("cost_model", [](const PyBvh& t) { return t.bvh->cost.describe(); },
-                               "The cost model the tree was built and is scored with.")
-        .def_property_readonly("node_count", [](const PyBvh& t) { return t.bvh->nodes.size(); }, "Nodes, inner and leaves.")
-        .def_property_readonly("reference_count", [](const PyBvh& t) { return t.bvh->primitives.size(); },
-                               "Triangle references in the leaves (spatial splits reference a triangle more than once).")
-        .def_property_readonly("sah", [](const PyBvh& t) { return tree_sah(*t.bvh, t.bvh->cost); },
-                               "The tree's SAH cost under its cost model.")
+        .def_property_readonly(
+            "scene", [](const PyBvh& t) { return t.scene; }, "The scene the tree was built over.")
+        .def_property_readonly(
+            "builder", [](const PyBvh& t) { return t.bvh->builder; },
+            "The builder's name, '+opt' when reinsertion optimised it.")
+        .def_property_readonly(
+            "cost_model", [](const PyBvh& t) { return t.bvh->cost.describe(); },
+            "The cost model the tree was built and is scored with.")
+        .def_property_readonly(
+            "node_count", [](const PyBvh& t) { return t.bvh->nodes.size(); }, "Nodes, inner and leaves.")
+        .def_property_readonly(
+            "reference_count", [](const PyBvh& t) { return t.bvh->primitives.size(); },
+            "Triangle references in the leaves (spatial splits reference a triangle more than once).")
+        .def_property_readonly(
+            "sah", [](const PyBvh& t) { return tree_sah(*t.bvh, t.bvh->cost); },
+            "The tree's SAH cost under its cost model.")
         .def("stats", &stats_of, py::arg("epo") = false,
              "Structure, memory and tree SAH (and EPO, the slow one, with epo=True) as a dict.")
         .def(
@@ -107,12 +115,13 @@ void bind_build(py::module_& m) {
                 return py::make_tuple(t.scene, py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
             },
             [](const py::tuple& state) {
-                if (state.size() != 2) throw Error("Bvh pickle: expected 2 fields, got " + std::to_string(state.size()));
+                if (state.size() != 2)
+                    throw Error("Bvh pickle: expected 2 fields, got " + std::to_string(state.size()));
                 PyScene scene = state[0].cast<PyScene>();
                 const std::string data = state[1].cast<std::string>();
                 const auto* begin = reinterpret_cast<const std::byte*>(data.data());
-                auto bvh = std::make_shared<Bvh>(
-                    deserialize_bvh(std::span<const std::byte>(begin, data.size()), scene.scene->triangles, "pickled Bvh"));
+                auto bvh = std::make_shared<Bvh>(deserialize_bvh(std::span<const std::byte>(begin, data.size()),
+                                                                 scene.scene->triangles, "pickled Bvh"));
                 return PyBvh{std::move(scene), std::move(bvh)};
             }));
 
@@ -131,11 +140,11 @@ void bind_build(py::module_& m) {
         "the file when it is truncated, corrupted, of another format version or built over other geometry.");
 
     m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
-          py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f, py::arg("intersection_cost") = 1.0f,
-          py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u, py::arg("reference_budget") = 1.3f,
-          py::arg("search") = "", py::arg("object_bins") = 32u, py::arg("spatial_bins") = 32u,
-          py::arg("spatial_gate") = py::none(), py::arg("lookahead_top") = 0.0f, py::arg("optimize") = 0u,
-          py::arg("threads") = 0,
+          py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f,
+          py::arg("intersection_cost") = 1.0f, py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u,
+          py::arg("reference_budget") = 1.3f, py::arg("search") = "", py::arg("object_bins") = 32u,
+          py::arg("spatial_bins") = 32u, py::arg("spatial_gate") = py::none(), py::arg("lookahead_top") = 0.0f,
+          py::arg("optimize") = 0u, py::arg("threads") = 0,
           "Builds a BVH with a named builder (builders()); overlap_penalty defaults to the builder's own C_o "
           "(float('inf'): disjoint children only); search = the CLI's --search ('binned,spatial': the fast spatial "
           "variant; '' = the builder's own); object_bins, spatial_bins = --bins, --spatial-bins; spatial_gate = "

@@ -28,9 +28,8 @@ py::tuple closest_hits(const PyEmbreeTracer& self, const py::handle& origins, co
     const int threads = threads_for(self, threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<Hit> hits(rays.size());
-    without_gil(threads, [&] {
-        self.packets ? self.embree->intersect16(rays, hits) : self.embree->intersect(rays, hits);
-    });
+    without_gil(threads,
+                [&] { self.packets ? self.embree->intersect16(rays, hits) : self.embree->intersect(rays, hits); });
     return hits_as_arrays(self.scene.frame, hits);
 }
 
@@ -39,9 +38,8 @@ py::array_t<bool> any_hits(const PyEmbreeTracer& self, const py::handle& origins
     const int threads = threads_for(self, threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<uint8_t> answers(rays.size());
-    without_gil(threads, [&] {
-        self.packets ? self.embree->occluded16(rays, answers) : self.embree->occluded(rays, answers);
-    });
+    without_gil(threads,
+                [&] { self.packets ? self.embree->occluded16(rays, answers) : self.embree->occluded(rays, answers); });
     return answers_as_array(answers);
 }
 
@@ -66,11 +64,14 @@ void bind_embree(py::module_& m) {
                        (self.packets ? " rtcIntersect16" : " rtcIntersect1");
             },
             "The Embree build quality and call, e.g. 'embree-high rtcIntersect1'.")
-        .def_property_readonly("build_ms", [](const PyEmbreeTracer& self) { return self.embree->build_milliseconds(); },
-                               "Embree's build time in milliseconds.")
-        .def_property_readonly("memory_bytes", [](const PyEmbreeTracer& self) { return self.embree->memory_bytes(); },
-                               "Bytes Embree allocated for the scene.")
-        .def_property_readonly("scene", [](const PyEmbreeTracer& self) { return self.scene; }, "The scene traced.")
+        .def_property_readonly(
+            "build_ms", [](const PyEmbreeTracer& self) { return self.embree->build_milliseconds(); },
+            "Embree's build time in milliseconds.")
+        .def_property_readonly(
+            "memory_bytes", [](const PyEmbreeTracer& self) { return self.embree->memory_bytes(); },
+            "Bytes Embree allocated for the scene.")
+        .def_property_readonly(
+            "scene", [](const PyEmbreeTracer& self) { return self.scene; }, "The scene traced.")
         .def("intersect", &closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              "As Tracer.intersect: arrays t, primitive (-1 on a miss), u, v.")

@@ -23,8 +23,7 @@ Doubles rows_of_three(const py::handle& object, const char* what) {
     Doubles array = Doubles::ensure(object);
     if (!array) throw Error(std::string(what) + " must be an array of numbers");
     if (array.ndim() == 1 && array.shape(0) == 3) array = array.reshape({py::ssize_t(1), py::ssize_t(3)});
-    if (array.ndim() != 2 || array.shape(1) != 3)
-        throw Error(std::string(what) + " must have shape (n, 3)");
+    if (array.ndim() != 2 || array.shape(1) != 3) throw Error(std::string(what) + " must have shape (n, 3)");
     return array;
 }
 
@@ -120,7 +119,8 @@ void bind_float64(py::module_& m) {
             py::arg("origins"), py::arg("directions"), py::arg("tmin") = py::none(), py::arg("tmax") = py::none(),
             "Whether each ray hits anything for t in [tmin, tmax] (exact).")
         .def_property_readonly(
-            "triangle_count", [](const PyTracer64& self) { return self.triangle_count; }, "The number of triangles traced.")
+            "triangle_count", [](const PyTracer64& self) { return self.triangle_count; },
+            "The number of triangles traced.")
         .def_property_readonly(
             "frame_origin",
             [](const PyTracer64& self) {

@@ -97,20 +97,27 @@ int64_t IndexRows::operator()(size_t row, int column) const {
     const char* p = data_ + py::ssize_t(row) * row_stride_ + column * column_stride_;
     if (is_signed_) {
         switch (item_size_) {
-            case 1: return *reinterpret_cast<const int8_t*>(p);
-            case 2: return *reinterpret_cast<const int16_t*>(p);
-            case 4: return *reinterpret_cast<const int32_t*>(p);
-            default: return *reinterpret_cast<const int64_t*>(p);
+            case 1:
+                return *reinterpret_cast<const int8_t*>(p);
+            case 2:
+                return *reinterpret_cast<const int16_t*>(p);
+            case 4:
+                return *reinterpret_cast<const int32_t*>(p);
+            default:
+                return *reinterpret_cast<const int64_t*>(p);
         }
     }
     switch (item_size_) {
-        case 1: return *reinterpret_cast<const uint8_t*>(p);
-        case 2: return *reinterpret_cast<const uint16_t*>(p);
-        case 4: return *reinterpret_cast<const uint32_t*>(p);
+        case 1:
+            return *reinterpret_cast<const uint8_t*>(p);
+        case 2:
+            return *reinterpret_cast<const uint16_t*>(p);
+        case 4:
+            return *reinterpret_cast<const uint32_t*>(p);
         default: {
             const uint64_t value = *reinterpret_cast<const uint64_t*>(p);
             return value > uint64_t(std::numeric_limits<int64_t>::max()) ? std::numeric_limits<int64_t>::max()
-                                                                          : int64_t(value);
+                                                                         : int64_t(value);
         }
     }
 }
@@ -126,7 +133,8 @@ PerRay PerRay::from(const py::handle& object, size_t rays, const char* what) {
     py::array array = as_array(object);
     const char kind = array.dtype().kind();
     if (kind != 'f' && kind != 'i' && kind != 'u')
-        throw py::type_error(std::string(what) + " must be a number or an array of numbers, not dtype " + dtype_text(array));
+        throw py::type_error(std::string(what) + " must be a number or an array of numbers, not dtype " +
+                             dtype_text(array));
     if (kind != 'f' || (array.dtype().itemsize() != 4 && array.dtype().itemsize() != 8) || !is_native(array))
         array = as_native(array, "float64");
     const bool float64 = array.dtype().itemsize() == 8;
@@ -136,8 +144,8 @@ PerRay PerRay::from(const py::handle& object, size_t rays, const char* what) {
         return result;
     }
     if (array.ndim() != 1 || size_t(array.shape(0)) != rays)
-        throw Error(std::string(what) + " must be a number or an array of " + std::to_string(rays) + " (one per ray), not " +
-                    shape_text(array));
+        throw Error(std::string(what) + " must be a number or an array of " + std::to_string(rays) +
+                    " (one per ray), not " + shape_text(array));
     result.float64_ = float64;
     result.data_ = static_cast<const char*>(array.data());
     result.stride_ = array.strides(0);
@@ -157,7 +165,8 @@ namespace {
 
 // The ray at index i, or nullptr and the reason it cannot be traced.
 template <typename O, typename D>
-const char* ray_at(const Frame& frame, const O& o, const D& d, const PerRay& tmin, const PerRay& tmax, size_t i, Ray& ray) {
+const char* ray_at(const Frame& frame, const O& o, const D& d, const PerRay& tmin, const PerRay& tmax, size_t i,
+                   Ray& ray) {
     for (int axis = 0; axis < 3; ++axis) {
         ray.org[axis] = frame.to_local(o(i, axis), axis);
         ray.dir[axis] = float(d(i, axis));
@@ -181,8 +190,7 @@ std::vector<Ray> make_rays(const Frame& frame, const RealRows& origins, const Re
                 for (size_t i = range.begin(); i < range.end(); ++i) {
                     if (ray_at(frame, o, d, tmin, tmax, i, rays[i]) == nullptr) continue;
                     size_t seen = first_bad.load();
-                    while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
-                    }
+                    while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
                     break;  // later rays of this range cannot be the first bad one
                 }
             });

@@ -28,8 +28,8 @@ void put_point(const Frame& frame, const QueryHit& hit, double* out) {
     for (int axis = 0; axis < 3; ++axis) out[axis] = hit.point[size_t(axis)] + frame.origin[size_t(axis)];
 }
 
-py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
-                     const py::handle& tmax, std::optional<int> threads_arg) {
+py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
+                     const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<QueryHit> hits(rays.size());
@@ -37,7 +37,8 @@ py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py:
     const py::ssize_t n = py::ssize_t(hits.size());
     py::array_t<double> t(n), u(n), v(n), points(std::vector<py::ssize_t>{n, 3});
     py::array_t<int64_t> primitive(n);
-    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(), *p_out = points.mutable_data();
+    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(),
+           *p_out = points.mutable_data();
     int64_t* id_out = primitive.mutable_data();
     {
         py::gil_scoped_release unlocked;
@@ -67,9 +68,11 @@ py::array_t<int64_t> first_primitives(const PyQueries& self, const py::handle& o
     without_gil(threads, [&] {
         std::vector<uint32_t> ids(rays.size());
         self.queries->first_hit_ids(rays, ids);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
-            for (size_t i = range.begin(); i < range.end(); ++i) id_out[i] = ids[i] == kInvalidIndex ? -1 : int64_t(ids[i]);
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, ids.size(), 1 << 14),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i < range.end(); ++i)
+                                  id_out[i] = ids[i] == kInvalidIndex ? -1 : int64_t(ids[i]);
+                          });
     });
     return primitive;
 }
@@ -83,11 +86,12 @@ py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, con
     return answers_as_array(answers);
 }
 
-py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
-                   const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted, bool details_wanted,
-                   std::optional<int> threads_arg) {
+py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
+                   const py::handle& tmin, const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted,
+                   bool details_wanted, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
-    if (max_hits && *max_hits < 0) throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
+    if (max_hits && *max_hits < 0)
+        throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     HitLists lists;
     without_gil(threads, [&] { lists = self.queries->all_hits(rays, max_hits ? size_t(*max_hits) : kNoHitLimit); });
@@ -96,23 +100,25 @@ py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::h
     py::array_t<double> t(details), u(details), v(details);
     py::array_t<double> points(std::vector<py::ssize_t>{points_wanted ? m : 0, 3});
     int64_t *ray_out = index_ray.mutable_data(), *id_out = primitive.mutable_data();
-    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(), *p_out = points.mutable_data();
+    double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(),
+           *p_out = points.mutable_data();
     // Rays in blocks across the threads: each block writes the disjoint range of its rays' hits.
     without_gil(threads, [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
-            for (size_t r = range.begin(); r < range.end(); ++r)
-                for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
-                    const QueryHit& hit = lists.hits[k];
-                    ray_out[k] = int64_t(r);
-                    id_out[k] = int64_t(hit.primitive);
-                    if (details_wanted) {
-                        t_out[k] = hit.t;
-                        u_out[k] = hit.u;
-                        v_out[k] = hit.v;
-                    }
-                    if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
-                }
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t r = range.begin(); r < range.end(); ++r)
+                                  for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
+                                      const QueryHit& hit = lists.hits[k];
+                                      ray_out[k] = int64_t(r);
+                                      id_out[k] = int64_t(hit.primitive);
+                                      if (details_wanted) {
+                                          t_out[k] = hit.t;
+                                          u_out[k] = hit.u;
+                                          v_out[k] = hit.v;
+                                      }
+                                      if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
+                                  }
+                          });
     });
     return py::make_tuple(index_ray, primitive, t, u, v, points);
 }
@@ -139,22 +145,23 @@ py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, 
         // In blocks across the threads; the first row that is not finite is the one named.
         std::atomic<size_t> first_bad{points.size()};
         rows.visit([&](auto read) {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
-                for (size_t i = range.begin(); i < range.end(); ++i) {
-                    for (int axis = 0; axis < 3; ++axis) {
-                        const double value = read(i, axis);
-                        if (!std::isfinite(value)) {
-                            size_t seen = first_bad.load();
-                            while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
-                            }
-                            return;
-                        }
-                        points[i][axis] = frame.to_local(value, axis);
-                    }
-                }
-            });
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1 << 14),
+                              [&](const tbb::blocked_range<size_t>& range) {
+                                  for (size_t i = range.begin(); i < range.end(); ++i) {
+                                      for (int axis = 0; axis < 3; ++axis) {
+                                          const double value = read(i, axis);
+                                          if (!std::isfinite(value)) {
+                                              size_t seen = first_bad.load();
+                                              while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
+                                              return;
+                                          }
+                                          points[i][axis] = frame.to_local(value, axis);
+                                      }
+                                  }
+                              });
         });
-        if (first_bad.load() != points.size()) throw Error("points: row " + std::to_string(first_bad.load()) + " is not finite");
+        if (first_bad.load() != points.size())
+            throw Error("points: row " + std::to_string(first_bad.load()) + " is not finite");
         self.queries->contains(points, answers);
     });
     return answers_as_array(answers);
@@ -167,11 +174,12 @@ constexpr const char* kRaysDoc =
 }  // namespace
 
 void bind_queries(py::module_& m) {
-    py::class_<PyQueries>(m, "RayQueries",
-                          "Exact queries beyond the closest hit over a tree: every crossing of each ray (sorted by t), "
-                          "crossing counts, the first and any crossing, and point containment by parity. A ray through a "
-                          "shared edge or vertex of a connected surface crosses it once: the answers are those of the ray "
-                          "moved sideways by a fixed infinitesimal amount (docs/queries.md). Batch calls release the GIL.")
+    py::class_<PyQueries>(
+        m, "RayQueries",
+        "Exact queries beyond the closest hit over a tree: every crossing of each ray (sorted by t), "
+        "crossing counts, the first and any crossing, and point containment by parity. A ray through a "
+        "shared edge or vertex of a connected surface crosses it once: the answers are those of the ray "
+        "moved sideways by a fixed infinitesimal amount (docs/queries.md). Batch calls release the GIL.")
         .def(py::init([](const PyBvh& tree, int threads) {
                  check_threads(threads);
                  std::shared_ptr<const RayQueries> queries;
@@ -183,15 +191,19 @@ void bind_queries(py::module_& m) {
              }),
              py::arg("bvh"), py::arg("threads") = 0,
              "Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).")
-        .def_property_readonly("scene", [](const PyQueries& self) { return self.scene; }, "The scene queried.")
-        .def_property_readonly("threads", [](const PyQueries& self) { return self.threads; },
-                               "The default thread limit of batch calls (0 = every core).")
-        .def("first", &first_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
-             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
-             (std::string(kRaysDoc) +
-              "The first crossing of each ray: (t float64 (inf on a miss), primitive int64 (-1 on a miss), u, v float64 "
-              "barycentrics of the second and third corners, points (k, 3) float64 in the caller's frame (NaN on a miss)).")
-                 .c_str())
+        .def_property_readonly(
+            "scene", [](const PyQueries& self) { return self.scene; }, "The scene queried.")
+        .def_property_readonly(
+            "threads", [](const PyQueries& self) { return self.threads; },
+            "The default thread limit of batch calls (0 = every core).")
+        .def(
+            "first", &first_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+            py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
+            (std::string(kRaysDoc) +
+             "The first crossing of each ray: (t float64 (inf on a miss), primitive int64 (-1 on a miss), u, v float64 "
+             "barycentrics of the second and third corners, points (k, 3) float64 in the caller's frame (NaN on a "
+             "miss)).")
+                .c_str())
         .def("first_primitive", &first_primitives, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              (std::string(kRaysDoc) +
@@ -213,7 +225,8 @@ void bind_queries(py::module_& m) {
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              (std::string(kRaysDoc) + "The number of crossings of each ray: an int64 array.").c_str())
         .def("contains", &contains, py::arg("points"), py::kw_only(), py::arg("threads") = py::none(),
-             "Whether each point (n, 3) is inside the mesh by the parity of the crossings of a fixed ray from it (exact; "
+             "Whether each point (n, 3) is inside the mesh by the parity of the crossings of a fixed ray from it "
+             "(exact; "
              "the same answer on every run and thread count). Meaningful for closed meshes; a point on the surface "
              "counts as the point moved infinitesimally against containment_direction().");
     m.def(

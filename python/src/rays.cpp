@@ -56,7 +56,8 @@ std::vector<HitRecord> make_hit_records(const py::handle& t_arg, const py::handl
         const int64_t id = ids(py::ssize_t(i));
         if (std::isnan(distance)) throw Error("hit " + std::to_string(i) + ": t is NaN");
         if (id < -1 || id >= int64_t(kInvalidIndex))
-            throw Error("hit " + std::to_string(i) + ": primitive " + std::to_string(id) + " out of range (-1 = a miss)");
+            throw Error("hit " + std::to_string(i) + ": primitive " + std::to_string(id) +
+                        " out of range (-1 = a miss)");
         records[i] = {distance, id < 0 ? kInvalidIndex : uint32_t(id)};
     }
     return records;
@@ -75,8 +76,8 @@ py::tuple hit_records_as_arrays(const std::vector<HitRecord>& records) {
     return py::make_tuple(t, primitive);
 }
 
-py::tuple diffuse_rays(const PyScene& scene, const py::handle& origins, const py::handle& directions, const py::handle& t,
-                       const py::handle& primitive, uint64_t seed, float epsilon) {
+py::tuple diffuse_rays(const PyScene& scene, const py::handle& origins, const py::handle& directions,
+                       const py::handle& t, const py::handle& primitive, uint64_t seed, float epsilon) {
     if (!(std::isfinite(epsilon) && epsilon >= 0.0f))
         throw Error("epsilon must be finite and >= 0 (0: the spec's default, 1e-4 x |scene diagonal|), not " +
                     std::to_string(epsilon));
@@ -87,7 +88,8 @@ py::tuple diffuse_rays(const PyScene& scene, const py::handle& origins, const py
     for (size_t i = 0; i < records.size(); ++i) {
         if (records[i].primitive == kInvalidIndex) continue;
         if (!std::isfinite(records[i].t) || records[i].t < 0.0f)
-            throw Error("hit " + std::to_string(i) + ": a hit needs a finite t >= 0, not " + std::to_string(records[i].t));
+            throw Error("hit " + std::to_string(i) + ": a hit needs a finite t >= 0, not " +
+                        std::to_string(records[i].t));
         hits[i].t = records[i].t;
         hits[i].primitive = records[i].primitive;
     }
@@ -153,7 +155,8 @@ void bind_rays(py::module_& m) {
             py::gil_scoped_release unlocked;
             write_ray_file(path, rays);
         },
-        py::arg("path"), py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0, py::arg("tmax") = double(kInfinity),
+        py::arg("path"), py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+        py::arg("tmax") = double(kInfinity),
         "Writes a ray file of docs/rays.md (float32; tmin, tmax: numbers or one per ray).");
     m.def(
         "read_hits",

@@ -49,10 +49,12 @@ Frame frame_of(const V& vertex, size_t count, bool float64) {
     if (!float64 || count == 0) return frame;
     for (size_t axis = 0; axis < 3; ++axis) frame.origin[axis] = lo[axis] + (hi[axis] - lo[axis]) * 0.5;
     for (int axis = 0; axis < 3; ++axis)
-        if (!std::isfinite(frame.to_local(lo[size_t(axis)], axis)) || !std::isfinite(frame.to_local(hi[size_t(axis)], axis)))
+        if (!std::isfinite(frame.to_local(lo[size_t(axis)], axis)) ||
+            !std::isfinite(frame.to_local(hi[size_t(axis)], axis)))
             for (size_t i = 0; i < count; ++i)
                 if (!std::isfinite(frame.to_local(vertex(i, axis), axis)))
-                    throw Error("vertices: vertex " + std::to_string(i) + " lies beyond float32's range of its mesh's centre");
+                    throw Error("vertices: vertex " + std::to_string(i) +
+                                " lies beyond float32's range of its mesh's centre");
     return frame;
 }
 
@@ -71,13 +73,15 @@ PyScene make_mesh(const py::handle& vertices_arg, const py::handle& faces_arg, c
             auto corner = [&](size_t triangle, int k) {
                 const int64_t index = faces(triangle, k);
                 if (index < 0 || uint64_t(index) >= count)
-                    throw Error("faces: triangle " + std::to_string(triangle) + " uses vertex " + std::to_string(index) +
-                                ", outside 0.." + std::to_string(int64_t(count) - 1));
+                    throw Error("faces: triangle " + std::to_string(triangle) + " uses vertex " +
+                                std::to_string(index) + ", outside 0.." + std::to_string(int64_t(count) - 1));
                 const size_t i = size_t(index);
-                return Vec3{frame.to_local(vertex(i, 0), 0), frame.to_local(vertex(i, 1), 1), frame.to_local(vertex(i, 2), 2)};
+                return Vec3{frame.to_local(vertex(i, 0), 0), frame.to_local(vertex(i, 1), 1),
+                            frame.to_local(vertex(i, 2), 2)};
             };
             scene->triangles.reserve(faces.rows());
-            for (size_t t = 0; t < faces.rows(); ++t) scene->triangles.push_back({corner(t, 0), corner(t, 1), corner(t, 2)});
+            for (size_t t = 0; t < faces.rows(); ++t)
+                scene->triangles.push_back({corner(t, 0), corner(t, 1), corner(t, 2)});
         });
         scene->degenerate_count = size_t(std::count_if(scene->triangles.begin(), scene->triangles.end(),
                                                        [](const Triangle& t) { return t.is_degenerate(); }));
@@ -88,12 +92,13 @@ PyScene make_mesh(const py::handle& vertices_arg, const py::handle& faces_arg, c
 // Points on the triangles at barycentrics (u, v), in the caller's frame, computed in double from the
 // triangle's corners (so their precision is the mesh's, not that of o + t d in float32). NaN for a
 // miss (primitive -1).
-py::array hit_points(const PyScene& self, const py::handle& primitive_arg, const py::handle& u_arg, const py::handle& v_arg) {
+py::array hit_points(const PyScene& self, const py::handle& primitive_arg, const py::handle& u_arg,
+                     const py::handle& v_arg) {
     const auto primitive = py::array_t<int64_t, py::array::forcecast>::ensure(primitive_arg);
     const auto u = py::array_t<double, py::array::forcecast>::ensure(u_arg);
     const auto v = py::array_t<double, py::array::forcecast>::ensure(v_arg);
-    if (!primitive || !u || !v || primitive.ndim() != 1 || u.ndim() != 1 || v.ndim() != 1 || u.shape(0) != primitive.shape(0) ||
-        v.shape(0) != primitive.shape(0))
+    if (!primitive || !u || !v || primitive.ndim() != 1 || u.ndim() != 1 || v.ndim() != 1 ||
+        u.shape(0) != primitive.shape(0) || v.shape(0) != primitive.shape(0))
         throw Error("primitive, u and v must be 1-D arrays of one length (intersect()'s answers)");
     const py::ssize_t n = primitive.shape(0);
     py::array_t<double> points({n, py::ssize_t(3)});
@@ -112,7 +117,8 @@ py::array hit_points(const PyScene& self, const py::handle& primitive_arg, const
         const Triangle& t = triangles[size_t(p(i))];
         const double b1 = uu(i), b2 = vv(i), b0 = 1.0 - b1 - b2;
         for (int axis = 0; axis < 3; ++axis)
-            out(i, axis) = b0 * double(t.v0[axis]) + b1 * double(t.v1[axis]) + b2 * double(t.v2[axis]) + self.frame.origin[size_t(axis)];
+            out(i, axis) = b0 * double(t.v0[axis]) + b1 * double(t.v1[axis]) + b2 * double(t.v2[axis]) +
+                           self.frame.origin[size_t(axis)];
     }
     if (self.frame.float64) return points;
     return points.attr("astype")("float32").cast<py::array>();
@@ -155,18 +161,22 @@ void bind_scenes(py::module_& m) {
                         "Triangles in file (or index) order; degenerate ones are kept and never hit. Scenes made from "
                         "float64 vertices hold them in a frame centred on their bounds (origin) and answer in float64 "
                         "in the caller's frame.")
-        .def_property_readonly("name", [](const PyScene& s) { return s.scene->name; }, "The file stem, builtin name or mesh name.")
+        .def_property_readonly(
+            "name", [](const PyScene& s) { return s.scene->name; }, "The file stem, builtin name or mesh name.")
         // Pickling: the triangles' float32 bytes (as the scene holds them) and the frame, so a scene
         // comes back bit for bit and a tree saved over it still matches its geometry hash.
         .def(py::pickle(
             [](const PyScene& s) {
                 const auto& triangles = s.scene->triangles;
-                const py::bytes data(reinterpret_cast<const char*>(triangles.data()), triangles.size() * sizeof(Triangle));
-                return py::make_tuple(s.scene->name, data, py::make_tuple(s.frame.origin[0], s.frame.origin[1], s.frame.origin[2]),
+                const py::bytes data(reinterpret_cast<const char*>(triangles.data()),
+                                     triangles.size() * sizeof(Triangle));
+                return py::make_tuple(s.scene->name, data,
+                                      py::make_tuple(s.frame.origin[0], s.frame.origin[1], s.frame.origin[2]),
                                       s.frame.float64);
             },
             [](const py::tuple& state) {
-                if (state.size() != 4) throw Error("Scene pickle: expected 4 fields, got " + std::to_string(state.size()));
+                if (state.size() != 4)
+                    throw Error("Scene pickle: expected 4 fields, got " + std::to_string(state.size()));
                 auto scene = std::make_shared<Scene>();
                 scene->name = state[0].cast<std::string>();
                 const std::string data = state[1].cast<std::string>();
@@ -182,21 +192,25 @@ void bind_scenes(py::module_& m) {
                 frame.float64 = state[3].cast<bool>();
                 return PyScene{std::move(scene), frame};
             }))
-        .def_property_readonly("triangle_count", [](const PyScene& s) { return s.scene->triangles.size(); },
-                               "Number of triangles, degenerate ones included.")
-        .def_property_readonly("degenerate_count", [](const PyScene& s) { return s.scene->degenerate_count; },
-                               "Number of zero-area triangles (never hit).")
+        .def_property_readonly(
+            "triangle_count", [](const PyScene& s) { return s.scene->triangles.size(); },
+            "Number of triangles, degenerate ones included.")
+        .def_property_readonly(
+            "degenerate_count", [](const PyScene& s) { return s.scene->degenerate_count; },
+            "Number of zero-area triangles (never hit).")
         .def_property_readonly(
             "bounds",
             [](const PyScene& s) {
                 const AABB box = s.scene->bounds();
                 const Frame& f = s.frame;
-                return py::make_tuple(py::make_tuple(f.to_caller(box.lo.x, 0), f.to_caller(box.lo.y, 1), f.to_caller(box.lo.z, 2)),
-                                      py::make_tuple(f.to_caller(box.hi.x, 0), f.to_caller(box.hi.y, 1), f.to_caller(box.hi.z, 2)));
+                return py::make_tuple(
+                    py::make_tuple(f.to_caller(box.lo.x, 0), f.to_caller(box.lo.y, 1), f.to_caller(box.lo.z, 2)),
+                    py::make_tuple(f.to_caller(box.hi.x, 0), f.to_caller(box.hi.y, 1), f.to_caller(box.hi.z, 2)));
             },
             "((xmin, ymin, zmin), (xmax, ymax, zmax)) in the caller's frame.")
         .def_property_readonly(
-            "origin", [](const PyScene& s) { return py::make_tuple(s.frame.origin[0], s.frame.origin[1], s.frame.origin[2]); },
+            "origin",
+            [](const PyScene& s) { return py::make_tuple(s.frame.origin[0], s.frame.origin[1], s.frame.origin[2]); },
             "Where the scene's local frame sits in the caller's: (0, 0, 0) unless made from float64 vertices.")
         .def_property_readonly(
             "dtype", [](const PyScene& s) { return py::dtype(s.frame.float64 ? "float64" : "float32"); },
@@ -205,11 +219,12 @@ void bind_scenes(py::module_& m) {
              "The triangles as traced, (m, 3, 3) in the caller's frame and the scene's dtype (a float64 mesh's "
              "vertices as rounded in its local frame).")
         .def("hit_points", &hit_points, py::arg("primitive"), py::arg("u"), py::arg("v"),
-             "Points at barycentrics (u, v) of the triangles `primitive` (intersect()'s answers), (k, 3) in the caller's "
+             "Points at barycentrics (u, v) of the triangles `primitive` (intersect()'s answers), (k, 3) in the "
+             "caller's "
              "frame, computed in double from the triangles' corners; NaN rows for misses (primitive -1).")
         .def("__repr__", [](const PyScene& s) {
-            return "<spacebvh.Scene '" + s.scene->name + "', " + std::to_string(s.scene->triangles.size()) + " triangles" +
-                   (s.frame.float64 ? ", float64" : "") + ">";
+            return "<spacebvh.Scene '" + s.scene->name + "', " + std::to_string(s.scene->triangles.size()) +
+                   " triangles" + (s.frame.float64 ? ", float64" : "") + ">";
         });
 
     m.def(

@@ -44,8 +44,8 @@ namespace {
 
 int threads_for(const PyTracer& self, std::optional<int> threads) { return threads ? *threads : self.threads; }
 
-py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions, const py::handle& tmin,
-                       const py::handle& tmax, std::optional<int> threads_arg) {
+py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
+                       const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<Hit> hits(rays.size());
@@ -67,8 +67,10 @@ py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, cons
 py::class_<PyTracer> bind_tracer(py::module_& m) {
     m.def("kernels", &kernel_names, "The kernel names Tracer accepts on this CPU.");
 
-    py::class_<PyTracer> tracer(m, "Tracer", "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.");
-    tracer.def(py::init([](const PyBvh& tree, const std::string& kernel, int threads) {
+    py::class_<PyTracer> tracer(m, "Tracer",
+                                "A traversal kernel over a tree; answers equal the exact arbiter of rays.md.");
+    tracer
+        .def(py::init([](const PyBvh& tree, const std::string& kernel, int threads) {
                  check_threads(threads);
                  std::unique_ptr<Tracer> chosen;
                  {
@@ -80,12 +82,16 @@ py::class_<PyTracer> bind_tracer(py::module_& m) {
              py::arg("bvh"), py::arg("kernel") = "auto", py::arg("threads") = 0,
              "A tracer over `bvh` with a named kernel (kernels(); 'auto' = the fastest single-ray one). Batch calls "
              "release the GIL and use `threads` threads (0 = every core) unless they say otherwise.")
-        .def_property_readonly("kernel", [](const PyTracer& self) { return self.tracer->name(); }, "The kernel's name.")
-        .def_property_readonly("memory_bytes", [](const PyTracer& self) { return self.tracer->memory_bytes(); },
-                               "Bytes of the kernel's nodes and leaf triangle data.")
-        .def_property_readonly("scene", [](const PyTracer& self) { return self.scene; }, "The scene traced.")
-        .def_property_readonly("threads", [](const PyTracer& self) { return self.threads; },
-                               "The default thread limit of batch calls (0 = every core).")
+        .def_property_readonly(
+            "kernel", [](const PyTracer& self) { return self.tracer->name(); }, "The kernel's name.")
+        .def_property_readonly(
+            "memory_bytes", [](const PyTracer& self) { return self.tracer->memory_bytes(); },
+            "Bytes of the kernel's nodes and leaf triangle data.")
+        .def_property_readonly(
+            "scene", [](const PyTracer& self) { return self.scene; }, "The scene traced.")
+        .def_property_readonly(
+            "threads", [](const PyTracer& self) { return self.threads; },
+            "The default thread limit of batch calls (0 = every core).")
         .def("intersect", &closest_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              "Closest hits within [tmin, tmax] (numbers, or arrays of one per ray) of rays from origins (k, 3) along "

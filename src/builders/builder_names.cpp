@@ -59,16 +59,21 @@ uint32_t parse_search_spaces(const std::string& names) {
         const auto known = std::find_if(std::begin(kSearchSpaceNames), std::end(kSearchSpaceNames),
                                         [&](const SearchSpaceName& entry) { return name == entry.name; });
         if (known == std::end(kSearchSpaceNames))
-            throw Error("unknown search space '" + name + "' in '" + names + "' (known: object, binned, spatial, spatial-sweep, grid)");
+            throw Error("unknown search space '" + name + "' in '" + names +
+                        "' (known: object, binned, spatial, spatial-sweep, grid)");
         spaces |= uint32_t(known->space);
         name.clear();
     };
     for (char c : names) {
-        if (c == ',' || c == '+') take();
-        else if (c != ' ') name += c;
+        if (c == ',' || c == '+')
+            take();
+        else if (c != ' ')
+            name += c;
     }
     take();
-    if (spaces == 0) throw Error("empty list of search spaces '" + names + "' (known: object, binned, spatial, spatial-sweep, grid)");
+    if (spaces == 0)
+        throw Error("empty list of search spaces '" + names +
+                    "' (known: object, binned, spatial, spatial-sweep, grid)");
     return spaces;
 }
 

@@ -13,8 +13,8 @@ void CostModel::validate() const {
     auto check = [](float value, const char* name, bool allow_infinity) {
         if (std::isnan(value) || value < 0.0f || (!allow_infinity && std::isinf(value))) {
             std::ostringstream message;
-            message << "cost model: " << name << " must be a finite number >= 0"
-                    << (allow_infinity ? " or inf" : "") << ", got " << value;
+            message << "cost model: " << name << " must be a finite number >= 0" << (allow_infinity ? " or inf" : "")
+                    << ", got " << value;
             throw Error(message.str());
         }
     };

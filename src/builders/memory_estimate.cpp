@@ -6,10 +6,10 @@
 //   node slots      2 x 36 bytes (2C - 1 slots, top_down_builder.cpp)
 // and then, at different times, the partition's copies of the two children at the top nodes (2 x 28
 // bytes) or the output tree (a 32-byte node per reference or less, leaves holding two or more, and a
-// 4-byte id): 56 bytes; with recursive cost evaluation 56 more. Plus kFixedBytes for thread stacks and the small per-node buffers. An indexed
-// mesh adds its 36-byte triangle copy; the reinsertion optimiser runs once the slots and references
-// are freed and needs less. On builtin:city:N from 10^6 triangles the measured peak RSS is 0.90 to
-// 1.00 of the scene's bytes plus this (bench/scale.sh prints both).
+// 4-byte id): 56 bytes; with recursive cost evaluation 56 more. Plus kFixedBytes for thread stacks and the small
+// per-node buffers. An indexed mesh adds its 36-byte triangle copy; the reinsertion optimiser runs once the slots and
+// references are freed and needs less. On builtin:city:N from 10^6 triangles the measured peak RSS is 0.90 to 1.00 of
+// the scene's bytes plus this (bench/scale.sh prints both).
 #include "builders/memory_estimate.hpp"
 
 #include <cmath>
@@ -37,12 +37,14 @@ MemoryEstimate estimate_build_memory(uint64_t triangle_count, const BuildConfig&
     const uint32_t spaces = builders::effective_search_spaces(preset, config);
     const bool grows = builders::splits_references(spaces, config) || preset.presplit != builders::Presplit::none;
     const uint64_t capacity =
-        grows ? std::max<uint64_t>(triangle_count, uint64_t(double(config.limits.reference_budget) * double(triangle_count)))
+        grows ? std::max<uint64_t>(triangle_count,
+                                   uint64_t(double(config.limits.reference_budget) * double(triangle_count)))
               : triangle_count;
     const bool keeps_orders = spaces & uint32_t(SearchSpace::object_sweep);
     const uint64_t reference_bytes = (keeps_orders ? 3 : 1) * sizeof(builders::Reference);
     // Leaves of one reference: two nodes per reference.
-    const uint64_t tree_bytes = config.limits.max_leaf_size == 1 ? 2 * sizeof(BvhNode) + sizeof(uint32_t) : kChildrenOrTreeBytes;
+    const uint64_t tree_bytes =
+        config.limits.max_leaf_size == 1 ? 2 * sizeof(BvhNode) + sizeof(uint32_t) : kChildrenOrTreeBytes;
     // Recursive cost evaluation prices each candidate on a copy of the node's references, nested
     // along the subtree it builds: about two copies of the root's.
     const bool looks_ahead = config.lookahead.depth > 0 || config.lookahead.top_share > 0;
@@ -69,10 +71,14 @@ uint64_t available_memory_bytes() {
 
 std::string format_bytes(uint64_t bytes) {
     char text[64];
-    if (bytes < 1024) std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
-    else if (bytes < (uint64_t(1) << 20)) std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
-    else if (bytes < (uint64_t(1) << 30)) std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / double(1 << 20));
-    else std::snprintf(text, sizeof text, "%.2f GiB", double(bytes) / double(uint64_t(1) << 30));
+    if (bytes < 1024)
+        std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
+    else if (bytes < (uint64_t(1) << 20))
+        std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
+    else if (bytes < (uint64_t(1) << 30))
+        std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / double(1 << 20));
+    else
+        std::snprintf(text, sizeof text, "%.2f GiB", double(bytes) / double(uint64_t(1) << 30));
     return text;
 }
 
@@ -87,7 +93,8 @@ void check_memory_estimate(const std::string& what, uint64_t estimate_bytes, uin
 
 namespace builders {
 
-void check_build_memory(uint64_t triangle_count, bool indexed_mesh, const std::string& mesh_name, const BuildConfig& config) {
+void check_build_memory(uint64_t triangle_count, bool indexed_mesh, const std::string& mesh_name,
+                        const BuildConfig& config) {
     const MemoryEstimate estimate = estimate_build_memory(triangle_count, config, indexed_mesh);
     const std::string what = "mesh '" + mesh_name + "' (" + std::to_string(triangle_count) + " triangles, builder " +
                              to_string(config.preset) + ")";

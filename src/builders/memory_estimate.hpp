@@ -17,7 +17,8 @@ inline constexpr uint64_t kMaxReferenceCapacity = (uint64_t(1) << 31) - 1;
 
 // Throws Error naming the mesh, the estimate and the limit when the build would not fit
 // (check_memory_estimate), or when its reference capacity exceeds kMaxReferenceCapacity.
-void check_build_memory(uint64_t triangle_count, bool indexed_mesh, const std::string& mesh_name, const BuildConfig& config);
+void check_build_memory(uint64_t triangle_count, bool indexed_mesh, const std::string& mesh_name,
+                        const BuildConfig& config);
 inline void check_build_memory(const MeshView& mesh, const BuildConfig& config) {
     check_build_memory(mesh.triangle_count(), !mesh.is_soup(), mesh.name(), config);
 }

@@ -245,7 +245,8 @@ SplitBounds TrianglePiece::split(int axis, float position) const {
         }
     }
     const AABB below = below_points.rounded(), above = above_points.rounded();
-    if (!left_limit.is_empty()) result.left = polygon_.overflow && !below.is_empty() ? left_limit : clamped_into(below, left_limit);
+    if (!left_limit.is_empty())
+        result.left = polygon_.overflow && !below.is_empty() ? left_limit : clamped_into(below, left_limit);
     if (!right_limit.is_empty())
         result.right = polygon_.overflow && !above.is_empty() ? right_limit : clamped_into(above, right_limit);
     return result;

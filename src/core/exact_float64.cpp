@@ -91,8 +91,8 @@ Vec3d sub(const Vec3d& a, const Vec3d& b) { return {a[0] - b[0], a[1] - b[1], a[
 //   orientation  (v0 - o, v1 - o, v2 - o rounded):   |error| <= gamma_8 * M,
 // with M the exact magnitude sum over the exact factors; the computed M (positive terms, gamma_6) over
 // rounded factors (gamma_3) is within gamma_10 of it. 2^-50 = 8 eps > gamma_7 (1 + gamma_10) covers
-// the edge function (and the 2x2 determinants of is_degenerate, gamma_4). The range test adds one subtraction and tmin * den (|error| <= gamma_8 Mnum + |tmin| gamma_8
-// Mden + 2 eps (Mnum + |tmin| Mden)): 2^-48 = 32 eps covers it.
+// the edge function (and the 2x2 determinants of is_degenerate, gamma_4). The range test adds one subtraction and tmin
+// * den (|error| <= gamma_8 Mnum + |tmin| gamma_8 Mden + 2 eps (Mnum + |tmin| Mden)): 2^-48 = 32 eps covers it.
 constexpr double kTripleProductBound = 0x1p-50;
 constexpr double kRangeBound = 0x1p-48;
 // Below this magnitude sum the relative bounds could meet subnormal rounding: decide exactly.

@@ -59,10 +59,12 @@ double edge_side_exact(const Ray& ray, Vec3 p, Vec3 q) {
     const double value = ddot(dir, dcross(first_rel, second_rel));
     // |error| <= 8 ulp of the sum of the magnitudes of the six products (the differences p - org
     // add at most one more rounding each).
-    const double magnitude = std::fabs(dir.x) * (std::fabs(first_rel.y * second_rel.z) + std::fabs(first_rel.z * second_rel.y)) +
-                             std::fabs(dir.y) * (std::fabs(first_rel.z * second_rel.x) + std::fabs(first_rel.x * second_rel.z)) +
-                             std::fabs(dir.z) * (std::fabs(first_rel.x * second_rel.y) + std::fabs(first_rel.y * second_rel.x));
-    const double signed_value = std::fabs(value) > 8.0 * 0x1p-52 * magnitude ? value : edge_side_exact(ray, first, second);
+    const double magnitude =
+        std::fabs(dir.x) * (std::fabs(first_rel.y * second_rel.z) + std::fabs(first_rel.z * second_rel.y)) +
+        std::fabs(dir.y) * (std::fabs(first_rel.z * second_rel.x) + std::fabs(first_rel.x * second_rel.z)) +
+        std::fabs(dir.z) * (std::fabs(first_rel.x * second_rel.y) + std::fabs(first_rel.y * second_rel.x));
+    const double signed_value =
+        std::fabs(value) > 8.0 * 0x1p-52 * magnitude ? value : edge_side_exact(ray, first, second);
     return q_first ? -signed_value : signed_value;
 }
 

@@ -15,7 +15,8 @@ std::vector<Out> expand(std::span<const Coordinate> xyz, std::span<const Index> 
     const std::string what = "mesh '" + name + "'";
     if (xyz.size() % 3 != 0)
         throw Error(what + ": " + std::to_string(xyz.size()) + " vertex coordinates, not a multiple of 3");
-    if (indices.size() % 3 != 0) throw Error(what + ": " + std::to_string(indices.size()) + " indices, not a multiple of 3");
+    if (indices.size() % 3 != 0)
+        throw Error(what + ": " + std::to_string(indices.size()) + " indices, not a multiple of 3");
     const size_t vertex_count = xyz.size() / 3;
     for (size_t i = 0; i < xyz.size(); ++i)
         if (!std::isfinite(xyz[i]) || !std::isfinite(float(xyz[i])))

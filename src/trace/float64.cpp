@@ -42,7 +42,8 @@ void check_ray(const Ray64& ray, size_t index) {
             throw Error(ray_name(index) + ": direction component " + std::to_string(ray.dir[i]) +
                         " outside the exact float64 range (0 or magnitude in [2^-200, 2^200])");
     }
-    if (ray.dir[0] == 0.0 && ray.dir[1] == 0.0 && ray.dir[2] == 0.0) throw Error(ray_name(index) + ": direction is zero");
+    if (ray.dir[0] == 0.0 && ray.dir[1] == 0.0 && ray.dir[2] == 0.0)
+        throw Error(ray_name(index) + ": direction is zero");
     for (double t : {ray.tmin, ray.tmax})
         if (std::isnan(t) || (std::isfinite(t) && !in_range(t, 0x1p500)))
             throw Error(ray_name(index) + ": tmin/tmax " + std::to_string(t) +
@@ -63,7 +64,8 @@ Frame make_frame(const MeshView& view, const std::vector<Triangle64>& triangles)
             for (int i = 0; i < 3; ++i) {
                 if (!in_range((*v)[i], 0x1p128))
                     throw Error("mesh '" + view.name() + "': triangle " + std::to_string(t) + " has the coordinate " +
-                                std::to_string((*v)[i]) + ", neither 0 nor of magnitude >= 2^-200 (the exact float64 range)");
+                                std::to_string((*v)[i]) +
+                                ", neither 0 nor of magnitude >= 2^-200 (the exact float64 range)");
                 lo[i] = std::min(lo[i], (*v)[i]);
                 hi[i] = std::max(hi[i], (*v)[i]);
             }
@@ -107,7 +109,7 @@ float round_up(double x) {
 
 // The ray in the local frame with what the conservative slab test needs.
 struct LocalRay {
-    Vec3d org, inv, pad;  // pad: slab widening along t for the origin's rounding, per axis
+    Vec3d org, inv, pad;   // pad: slab widening along t for the origin's rounding, per axis
     double org_error = 0;  // bound on |org - exact (ray.org - origin)| per axis, doubled
     bool parallel[3];
 };
@@ -168,7 +170,8 @@ struct Tracer64::Impl {
     Bvh bvh;
     Vec3d origin{};
 
-    void init(const MeshView& mesh, const std::vector<Triangle64>& mesh_triangles, const Frame& frame, const Bvh& local_bvh);
+    void init(const MeshView& mesh, const std::vector<Triangle64>& mesh_triangles, const Frame& frame,
+              const Bvh& local_bvh);
     // Updates `best` with the triangle's hit when closer (equal t: the lower id, as the arbiter).
     bool test(const Ray64& ray, uint32_t id, Hit64& best) const {
         if (degenerate[id]) return false;
@@ -192,7 +195,8 @@ void Tracer64::Impl::init(const MeshView& mesh, const std::vector<Triangle64>& m
     std::vector<uint8_t> in_tree(count, 0);
     for (uint32_t id : bvh.primitives) {
         if (id >= count)
-            throw Error(what + ": the tree holds triangle " + std::to_string(id) + ", the mesh has " + std::to_string(count));
+            throw Error(what + ": the tree holds triangle " + std::to_string(id) + ", the mesh has " +
+                        std::to_string(count));
         in_tree[id] = 1;
     }
     for (size_t n = 0; n < bvh.nodes.size(); ++n) {
@@ -203,7 +207,8 @@ void Tracer64::Impl::init(const MeshView& mesh, const std::vector<Triangle64>& m
     }
     std::vector<uint32_t> depth(bvh.nodes.size(), 0);
     for (size_t n = 0; n < bvh.nodes.size(); ++n) {
-        if (depth[n] > kMaxDepth) throw Error(what + ": the tree is deeper than " + std::to_string(kMaxDepth) + " levels");
+        if (depth[n] > kMaxDepth)
+            throw Error(what + ": the tree is deeper than " + std::to_string(kMaxDepth) + " levels");
         if (!bvh.nodes[n].is_leaf()) depth[bvh.nodes[n].first] = depth[bvh.nodes[n].first + 1] = depth[n] + 1;
     }
     // A tree over other triangles (not the local-frame stand-ins) would silently lose hits: each leaf
@@ -225,7 +230,8 @@ void Tracer64::Impl::init(const MeshView& mesh, const std::vector<Triangle64>& m
     // A stand-in of zero area may be dropped or clipped away by a builder: such triangles (and any the
     // tree lacks) are tested for every ray instead.
     for (size_t t = 0; t < count; ++t)
-        if (!degenerate[t] && (!in_tree[t] || frame.mesh.triangles[t].is_degenerate())) unindexed.push_back(uint32_t(t));
+        if (!degenerate[t] && (!in_tree[t] || frame.mesh.triangles[t].is_degenerate()))
+            unindexed.push_back(uint32_t(t));
 
     // Every point of a float64 triangle is the same barycentric combination of its corners as a point
     // of the stand-in, so lies within the corners' largest deviation of it: widening each leaf box by
@@ -326,7 +332,8 @@ bool Tracer64::occluded(const Ray64& ray) const {
 
 void Tracer64::intersect(std::span<const Ray64> rays, std::span<Hit64> hits) const {
     if (hits.size() != rays.size())
-        throw Error("Tracer64::intersect: " + std::to_string(rays.size()) + " rays but room for " + std::to_string(hits.size()) + " hits");
+        throw Error("Tracer64::intersect: " + std::to_string(rays.size()) + " rays but room for " +
+                    std::to_string(hits.size()) + " hits");
     for (size_t i = 0; i < rays.size(); ++i) check_ray(rays[i], i);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const auto& range) {
         for (size_t i = range.begin(); i != range.end(); ++i) hits[i] = impl_->trace<false>(rays[i]);
@@ -335,10 +342,12 @@ void Tracer64::intersect(std::span<const Ray64> rays, std::span<Hit64> hits) con
 
 void Tracer64::occluded(std::span<const Ray64> rays, std::span<uint8_t> occluded) const {
     if (occluded.size() != rays.size())
-        throw Error("Tracer64::occluded: " + std::to_string(rays.size()) + " rays but room for " + std::to_string(occluded.size()) + " answers");
+        throw Error("Tracer64::occluded: " + std::to_string(rays.size()) + " rays but room for " +
+                    std::to_string(occluded.size()) + " answers");
     for (size_t i = 0; i < rays.size(); ++i) check_ray(rays[i], i);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 256), [&](const auto& range) {
-        for (size_t i = range.begin(); i != range.end(); ++i) occluded[i] = impl_->trace<true>(rays[i]).is_hit() ? 1 : 0;
+        for (size_t i = range.begin(); i != range.end(); ++i)
+            occluded[i] = impl_->trace<true>(rays[i]).is_hit() ? 1 : 0;
     });
 }
 

@@ -26,15 +26,19 @@ TracerConfig parse_kernel(const std::string& name) {
     if (const size_t at = kernel.find('@'); at != std::string::npos) {
         const std::string suffix = kernel.substr(at + 1);
         kernel.resize(at);
-        if (suffix == "area") config.collapse = WideCollapse::largest_area;
-        else if (suffix != "sah") throw Error("unknown kernel '" + name + "': a wide kernel takes a collapse, @sah or @area");
+        if (suffix == "area")
+            config.collapse = WideCollapse::largest_area;
+        else if (suffix != "sah")
+            throw Error("unknown kernel '" + name + "': a wide kernel takes a collapse, @sah or @area");
         collapse_given = true;
     }
     if (const size_t plus = kernel.find('+'); plus != std::string::npos) {
         const std::string suffix = kernel.substr(plus + 1);
         kernel.resize(plus);
-        if (suffix != "moller" || !(kernel.rfind("bvh4", 0) == 0 || kernel.rfind("bvh8", 0) == 0) || kernel.find("scalar") != std::string::npos)
-            throw Error("unknown kernel '" + name + "': only bvh4 and bvh8 kernels (not -scalar) take a leaf test, +moller");
+        if (suffix != "moller" || !(kernel.rfind("bvh4", 0) == 0 || kernel.rfind("bvh8", 0) == 0) ||
+            kernel.find("scalar") != std::string::npos)
+            throw Error("unknown kernel '" + name +
+                        "': only bvh4 and bvh8 kernels (not -scalar) take a leaf test, +moller");
         config.leaf_test = LeafTest::moller;
     }
     if (kernel == "binary" && !collapse_given) return TracerConfig{Kernel::binary};

@@ -121,12 +121,14 @@ namespace {
 using Layout = RayQueries::Layout;
 
 // Appends the leaf's live triangles as packs of its own; returns {first pack, lanes} or an empty slot.
-std::pair<uint32_t, uint32_t> add_leaf(Layout& layout, std::span<const Triangle> triangles, const Bvh& bvh, const BvhNode& leaf) {
+std::pair<uint32_t, uint32_t> add_leaf(Layout& layout, std::span<const Triangle> triangles, const Bvh& bvh,
+                                       const BvhNode& leaf) {
     std::vector<uint32_t> live;
     for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i) {
         const uint32_t id = bvh.primitives[i];
         if (id >= triangles.size())
-            throw Error("queries: the tree refers to triangle " + std::to_string(id) + " of " + std::to_string(triangles.size()));
+            throw Error("queries: the tree refers to triangle " + std::to_string(id) + " of " +
+                        std::to_string(triangles.size()));
         if (!triangles[id].is_degenerate()) live.push_back(id);
     }
     if (live.empty()) return {0, kEmptySlot};
@@ -154,7 +156,8 @@ void set_slot(QueryNode& node, int slot, const AABB& box, uint32_t child, uint32
 
 // Lays out the subtree under bvh node `index` as the children of a new query node; returns its index.
 uint32_t add_node(Layout& layout, std::span<const Triangle> triangles, const Bvh& bvh, uint32_t index, int depth) {
-    if (depth > kStackSize / 2) throw Error("queries: the tree is deeper than " + std::to_string(kStackSize / 2) + " levels");
+    if (depth > kStackSize / 2)
+        throw Error("queries: the tree is deeper than " + std::to_string(kStackSize / 2) + " levels");
     const uint32_t at = uint32_t(layout.nodes.size());
     layout.nodes.emplace_back();
     const BvhNode& node = bvh.nodes[index];
@@ -194,7 +197,8 @@ struct RayContext {
 // Tests a leaf's lanes; calls on_crossing(id, v0, v1, v2) for each triangle the perturbed ray crosses
 // transversally (the distance is left to the caller). Returns true when on_crossing asks to stop.
 template <class OnCrossing>
-inline bool visit_leaf(const trace::TrianglePack* packs, RayContext& r, uint32_t first, uint32_t count, OnCrossing&& on_crossing) {
+inline bool visit_leaf(const trace::TrianglePack* packs, RayContext& r, uint32_t first, uint32_t count,
+                       OnCrossing&& on_crossing) {
     for (uint32_t p = 0; p * 4 < count; ++p) {
         const trace::TrianglePack& pack = packs[first + p];
         const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
@@ -234,12 +238,15 @@ struct WideRay {
     }
 };
 
-inline unsigned wide_children(const trace::WideNode<8>& node, const WideRay& ray, float tmin, float tmax, __m256& near) {
+inline unsigned wide_children(const trace::WideNode<8>& node, const WideRay& ray, float tmin, float tmax,
+                              __m256& near) {
     near = _mm256_set1_ps(tmin);
     __m256 far = _mm256_set1_ps(tmax);
     for (int axis = 0; axis < 3; ++axis) {
-        const __m256 t_entry = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
-        const __m256 t_exit = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        const __m256 t_entry = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.entry_plane[axis]]),
+                                               ray.entry_scale[axis], ray.entry_offset[axis]);
+        const __m256 t_exit = _mm256_fmsub_ps(_mm256_load_ps(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis],
+                                              ray.exit_offset[axis]);
         near = _mm256_max_ps(t_entry, near);
         far = _mm256_min_ps(t_exit, far);
     }
@@ -283,7 +290,8 @@ inline void traverse_wide(const trace::WideLayout<8>& wide, const Ray& ray, OnLe
 // since is dropped when popped. `tmax` shrinks as crossings are found (a float at or above the best t
 // so far: boxes are entered conservatively up to it).
 template <class OnLeaf>
-inline void traverse_wide_nearest_first(const trace::WideLayout<8>& wide, const Ray& ray, const float& tmax, OnLeaf&& on_leaf) {
+inline void traverse_wide_nearest_first(const trace::WideLayout<8>& wide, const Ray& ray, const float& tmax,
+                                        OnLeaf&& on_leaf) {
     const WideRay boxes(ray);
     struct Entry {
         uint32_t child, count;
@@ -404,7 +412,8 @@ void collect_hits(const Layout& layout, const Ray& ray, std::vector<QueryHit>& o
     std::sort(out.begin(), out.end(), [](const QueryHit& a, const QueryHit& b) {
         return a.t < b.t || (a.t == b.t && a.primitive < b.primitive);
     });
-    out.erase(std::unique(out.begin(), out.end(), [](const QueryHit& a, const QueryHit& b) { return a.primitive == b.primitive; }),
+    out.erase(std::unique(out.begin(), out.end(),
+                          [](const QueryHit& a, const QueryHit& b) { return a.primitive == b.primitive; }),
               out.end());
     if (out.size() > max_hits) out.resize(max_hits);
 }
@@ -461,12 +470,13 @@ void find_nearest(const Layout& layout, const Ray& ray, Nearest& nearest) {
 #if defined(__AVX2__) && defined(__FMA__)
     if (layout.has_wide && ray.tmin >= 0.0f) {
         float box_tmax = ray.tmax;
-        traverse_wide_nearest_first(layout.wide, ray, box_tmax, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
-            visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
-                if (nearest.offer(id, v0, v1, v2)) box_tmax = std::nextafter(float(nearest.t), kInfinity);
-                return false;
+        traverse_wide_nearest_first(
+            layout.wide, ray, box_tmax, [&](const trace::TrianglePack* packs, uint32_t first, uint32_t count) {
+                visit_leaf(packs, r, first, count, [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
+                    if (nearest.offer(id, v0, v1, v2)) box_tmax = std::nextafter(float(nearest.t), kInfinity);
+                    return false;
+                });
             });
-        });
         return;
     }
 #endif
@@ -542,9 +552,9 @@ constexpr size_t kGrain = 256;
 
 template <class Body>
 void for_chunks(size_t n, Body&& body) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& range) {
-        body(range.begin(), range.end());
-    }, tbb::simple_partitioner());
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, n, kGrain),
+        [&](const tbb::blocked_range<size_t>& range) { body(range.begin(), range.end()); }, tbb::simple_partitioner());
 }
 
 // The order containment rays are walked in: their points bucketed on a grid over the mesh's box
@@ -592,9 +602,10 @@ std::vector<uint32_t> coherent_order(const AABB& bounds, size_t n, const RayAt& 
 constexpr size_t kOrderedBatch = 4096;
 
 void check_sizes(size_t a, size_t b, const char* what) {
-    if (a != b) throw Error(std::string("queries: ") + what + ": " + std::to_string(a) + " inputs but room for " + std::to_string(b) + " answers");
+    if (a != b)
+        throw Error(std::string("queries: ") + what + ": " + std::to_string(a) + " inputs but room for " +
+                    std::to_string(b) + " answers");
 }
-
 
 }  // namespace
 
@@ -708,7 +719,8 @@ HitLists RayQueries::all_hits(std::span<const Ray> rays, size_t max_hits) const 
     lists.hits.resize(lists.offsets.back());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t c = range.begin(); c != range.end(); ++c)
-            std::copy(chunk_hits[c].begin(), chunk_hits[c].end(), lists.hits.begin() + ptrdiff_t(lists.offsets[c * kGrain]));
+            std::copy(chunk_hits[c].begin(), chunk_hits[c].end(),
+                      lists.hits.begin() + ptrdiff_t(lists.offsets[c * kGrain]));
     });
     return lists;
 }
@@ -729,13 +741,15 @@ void RayQueries::contains(std::span<const Vec3> points, std::span<uint8_t> out) 
     if (n < kOrderedBatch || n > std::numeric_limits<uint32_t>::max() || layout_->nodes.empty()) {
         for_chunks(n, [&](size_t begin, size_t end) {
             std::vector<uint32_t> scratch;
-            for (size_t i = begin; i < end; ++i) out[i] = count_crossings(*layout_, containment_ray(points[i]), scratch) % 2;
+            for (size_t i = begin; i < end; ++i)
+                out[i] = count_crossings(*layout_, containment_ray(points[i]), scratch) % 2;
         });
         return;
     }
     // In coherent_order, the rays gathered first: read in place, each would be a cache miss the walk
     // waits on.
-    const std::vector<uint32_t> order = coherent_order(layout_->bounds, n, [&](size_t i) { return containment_ray(points[i]); });
+    const std::vector<uint32_t> order =
+        coherent_order(layout_->bounds, n, [&](size_t i) { return containment_ray(points[i]); });
     std::vector<Ray> ordered(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 14), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t k = range.begin(); k < range.end(); ++k) ordered[k] = containment_ray(points[order[k]]);

@@ -18,23 +18,34 @@ namespace spacebvh {
 
 const char* to_string(Kernel kernel) {
     switch (kernel) {
-        case Kernel::automatic: return "auto";
-        case Kernel::binary: return "binary";
-        case Kernel::bvh4: return "bvh4";
-        case Kernel::bvh8: return "bvh8";
-        case Kernel::packet8: return "packet8";
-        case Kernel::packet16: return "packet16";
+        case Kernel::automatic:
+            return "auto";
+        case Kernel::binary:
+            return "binary";
+        case Kernel::bvh4:
+            return "bvh4";
+        case Kernel::bvh8:
+            return "bvh8";
+        case Kernel::packet8:
+            return "packet8";
+        case Kernel::packet16:
+            return "packet16";
     }
     return "?";
 }
 
 const char* to_string(NodeTest test) {
     switch (test) {
-        case NodeTest::best: return "best";
-        case NodeTest::scalar: return "scalar";
-        case NodeTest::sse: return "sse";
-        case NodeTest::avx2: return "avx2";
-        case NodeTest::avx512: return "avx512";
+        case NodeTest::best:
+            return "best";
+        case NodeTest::scalar:
+            return "scalar";
+        case NodeTest::sse:
+            return "sse";
+        case NodeTest::avx2:
+            return "avx2";
+        case NodeTest::avx512:
+            return "avx512";
     }
     return "?";
 }
@@ -68,15 +79,16 @@ namespace {
 
 int width_of(Kernel kernel) {
     switch (kernel) {
-        case Kernel::binary: return 2;
-        case Kernel::bvh4: return 4;
-        default: return 8;
+        case Kernel::binary:
+            return 2;
+        case Kernel::bvh4:
+            return 4;
+        default:
+            return 8;
     }
 }
 
-uint32_t packet_size_of(Kernel kernel) {
-    return kernel == Kernel::packet8 ? 64 : kernel == Kernel::packet16 ? 256 : 0;
-}
+uint32_t packet_size_of(Kernel kernel) { return kernel == Kernel::packet8 ? 64 : kernel == Kernel::packet16 ? 256 : 0; }
 
 void check_belongs(std::span<const Triangle> triangles, const Bvh& bvh) {
     for (uint32_t primitive : bvh.primitives)
@@ -94,19 +106,19 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
     // The fastest single-ray kernel measured on every scene: 8 wide with the widest node test.
     if (config.kernel == Kernel::automatic) config.kernel = Kernel::bvh8;
     const int width = width_of(config.kernel);
-    const uint32_t packet_size = packet_size_of(config.kernel) && config.packet_size ? config.packet_size
-                                                                                     : packet_size_of(config.kernel);
+    const uint32_t packet_size =
+        packet_size_of(config.kernel) && config.packet_size ? config.packet_size : packet_size_of(config.kernel);
     if (packet_size > trace::kMaxPacket || (config.packet_size && !packet_size))
-        throw Error("packet size must be in [1, " + std::to_string(trace::kMaxPacket) + "] and only for packet kernels, got " +
-                    std::to_string(config.packet_size));
+        throw Error("packet size must be in [1, " + std::to_string(trace::kMaxPacket) +
+                    "] and only for packet kernels, got " + std::to_string(config.packet_size));
     const TriangleStore store(mesh);
     check_belongs(store.triangles(), bvh);
     if (config.leaf_test != LeafTest::watertight && (width == 2 || packet_size))
-        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no leaf test '" + to_string(config.leaf_test) +
-                    "' (bvh4 and bvh8 only)");
+        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no leaf test '" +
+                    to_string(config.leaf_test) + "' (bvh4 and bvh8 only)");
     if (config.node_format != NodeFormat::full && (config.kernel != Kernel::bvh8))
-        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no node format '" + to_string(config.node_format) +
-                    "' (bvh8 only)");
+        throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no node format '" +
+                    to_string(config.node_format) + "' (bvh8 only)");
     if (width == 2) {
         if (config.node_test != NodeTest::best || config.collapse != WideCollapse::sah_optimal)
             throw Error("the binary kernel takes no node test and no collapse");
@@ -118,7 +130,8 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
             throw Error(std::string("kernel '") + to_string(config.kernel) + "' has no node test '" +
                         to_string(config.node_test) + "'");
         if (!trace::cpu_has(config.node_test))
-            throw Error(std::string("this CPU lacks the instructions of node test '") + to_string(config.node_test) + "'");
+            throw Error(std::string("this CPU lacks the instructions of node test '") + to_string(config.node_test) +
+                        "'");
         const auto add_planes = [&](auto& layout) {
             if (config.leaf_test == LeafTest::moller) layout.planes = trace::make_pack_planes(layout.packs);
         };
@@ -223,22 +236,27 @@ void Tracer::occluded(std::span<const Ray> rays, std::span<uint8_t> result, Trav
 }
 
 size_t Tracer::memory_bytes() const {
-    return std::visit([](const auto& layout) -> size_t {
-        if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
-            return layout.buffer.size() * sizeof(layout.buffer[0]);
-        else
-            return layout.nodes.size() * sizeof(layout.nodes[0]) + layout.packs.size() * sizeof(trace::TrianglePack) +
-                   layout.planes.size() * sizeof(trace::PackPlanes);
-    }, impl_->layout);
+    return std::visit(
+        [](const auto& layout) -> size_t {
+            if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
+                return layout.buffer.size() * sizeof(layout.buffer[0]);
+            else
+                return layout.nodes.size() * sizeof(layout.nodes[0]) +
+                       layout.packs.size() * sizeof(trace::TrianglePack) +
+                       layout.planes.size() * sizeof(trace::PackPlanes);
+        },
+        impl_->layout);
 }
 
 size_t Tracer::node_count() const {
-    return std::visit([](const auto& layout) -> size_t {
-        if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
-            return layout.node_count;
-        else
-            return layout.nodes.size();
-    }, impl_->layout);
+    return std::visit(
+        [](const auto& layout) -> size_t {
+            if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
+                return layout.node_count;
+            else
+                return layout.nodes.size();
+        },
+        impl_->layout);
 }
 
 std::string Tracer::name() const {
@@ -246,7 +264,8 @@ std::string Tracer::name() const {
     std::string name = to_string(c.kernel);
     if (c.node_format == NodeFormat::quantized) name += "q";
     if (c.kernel != Kernel::binary) name += std::string("-") + to_string(c.node_test);
-    if (impl_->packet_size && impl_->packet_size != packet_size_of(c.kernel)) name += "-x" + std::to_string(impl_->packet_size);
+    if (impl_->packet_size && impl_->packet_size != packet_size_of(c.kernel))
+        name += "-x" + std::to_string(impl_->packet_size);
     if (c.leaf_test != LeafTest::watertight) name += std::string("+") + to_string(c.leaf_test);
     if (c.collapse != WideCollapse::sah_optimal) name += std::string("@") + to_string(c.collapse);
     return name;

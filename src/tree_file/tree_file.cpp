@@ -143,7 +143,8 @@ Layout layout_of(uint64_t builder_length, uint64_t settings_length, uint64_t nod
 }
 
 static_assert(sizeof(BvhNode) == kNodeRecordSize && std::is_trivially_copyable_v<BvhNode>);
-static_assert(offsetof(BvhNode, bounds) == 0 && offsetof(BvhNode, first) == 24 && offsetof(BvhNode, reference_count) == 28);
+static_assert(offsetof(BvhNode, bounds) == 0 && offsetof(BvhNode, first) == 24 &&
+              offsetof(BvhNode, reference_count) == 28);
 static_assert(sizeof(Triangle) == 36 && std::is_trivially_copyable_v<Triangle>);
 
 void store_node(std::byte* p, const BvhNode& node) {
@@ -169,7 +170,8 @@ std::string hex(uint64_t value) {
 }
 
 bool box_is_valid(const AABB& box) {
-    return is_finite(box.lo) && is_finite(box.hi) && box.lo.x <= box.hi.x && box.lo.y <= box.hi.y && box.lo.z <= box.hi.z;
+    return is_finite(box.lo) && is_finite(box.hi) && box.lo.x <= box.hi.x && box.lo.y <= box.hi.y &&
+           box.lo.z <= box.hi.z;
 }
 
 bool boxes_meet(const AABB& a, const AABB& b) { return !intersect(a, b).is_empty(); }
@@ -206,7 +208,8 @@ std::string tree_problem(const Bvh& bvh, std::span<const Triangle> triangles) {
         const auto [index, depth] = stack.back();
         stack.pop_back();
         if (depth > kTreeFileMaxDepth)
-            return "the tree is deeper than " + std::to_string(kTreeFileMaxDepth) + " levels (node " + std::to_string(index) + ")";
+            return "the tree is deeper than " + std::to_string(kTreeFileMaxDepth) + " levels (node " +
+                   std::to_string(index) + ")";
         const BvhNode& node = nodes[index];
         if (node.is_leaf()) {
             if (uint64_t(node.first) + node.reference_count > primitive_count)
@@ -233,7 +236,8 @@ std::string tree_problem(const Bvh& bvh, std::span<const Triangle> triangles) {
                    std::to_string(node_count) + " nodes";
         for (const uint32_t child : {node.first + 1, node.first}) {  // left on top: visited first
             if (reached[child]++)
-                return "node " + std::to_string(child) + " is reached twice from the root (a shared subtree or a cycle)";
+                return "node " + std::to_string(child) +
+                       " is reached twice from the root (a shared subtree or a cycle)";
             if (!node.bounds.contains(nodes[child].bounds))
                 return "node " + std::to_string(index) + "'s box does not contain its child " + std::to_string(child);
             stack.push_back({child, depth + 1});
@@ -272,8 +276,9 @@ uint64_t geometry_hash(std::span<const Triangle> triangles) {
 std::vector<std::byte> serialize_bvh(const Bvh& bvh, std::span<const Triangle> triangles, std::string_view settings) {
     if (bvh.nodes.empty()) throw Error("tree file: cannot save an empty tree");
     if (bvh.nodes.size() > kMaxCount || bvh.primitives.size() > kMaxCount || triangles.size() > kMaxCount)
-        throw Error("tree file: " + std::to_string(bvh.nodes.size()) + " nodes, " + std::to_string(bvh.primitives.size()) +
-                    " primitive ids or " + std::to_string(triangles.size()) + " triangles exceed the format's 2^32 - 1");
+        throw Error("tree file: " + std::to_string(bvh.nodes.size()) + " nodes, " +
+                    std::to_string(bvh.primitives.size()) + " primitive ids or " + std::to_string(triangles.size()) +
+                    " triangles exceed the format's 2^32 - 1");
     if (bvh.builder.size() > kMaxBuilderLength)
         throw Error("tree file: the builder label exceeds " + std::to_string(kMaxBuilderLength) + " bytes");
     if (settings.size() > kMaxSettingsLength)
@@ -305,7 +310,8 @@ std::vector<std::byte> serialize_bvh(const Bvh& bvh, std::span<const Triangle> t
         copy_bytes(out + layout.nodes, bvh.nodes.data(), bvh.nodes.size() * kNodeRecordSize);
         copy_bytes(out + layout.primitives, bvh.primitives.data(), bvh.primitives.size() * kPrimitiveRecordSize);
     } else {
-        for (size_t i = 0; i < bvh.nodes.size(); ++i) store_node(out + layout.nodes + kNodeRecordSize * i, bvh.nodes[i]);
+        for (size_t i = 0; i < bvh.nodes.size(); ++i)
+            store_node(out + layout.nodes + kNodeRecordSize * i, bvh.nodes[i]);
         for (size_t i = 0; i < bvh.primitives.size(); ++i)
             store_le(out + layout.primitives + kPrimitiveRecordSize * i, bvh.primitives[i]);
     }
@@ -313,8 +319,8 @@ std::vector<std::byte> serialize_bvh(const Bvh& bvh, std::span<const Triangle> t
     return bytes;
 }
 
-Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> triangles, const std::string& source_name,
-                    TreeFileInfo* info) {
+Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> triangles,
+                    const std::string& source_name, TreeFileInfo* info) {
     auto fail = [&](const std::string& what) -> Error { return Error(source_name + ": " + what); };
     const std::byte* in = bytes.data();
     const uint64_t size = bytes.size();
@@ -326,16 +332,17 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
         throw fail("truncated: " + std::to_string(size) + " bytes, shorter than the " + std::to_string(kHeaderSize) +
                    "-byte header");
     const uint32_t marker = load_le<uint32_t>(in + kAtEndian);
-    if (marker == byte_swap(kEndianMarker))
-        throw fail("written big-endian; tree files are little-endian");
+    if (marker == byte_swap(kEndianMarker)) throw fail("written big-endian; tree files are little-endian");
     if (marker != kEndianMarker) throw fail("corrupt endianness marker 0x" + hex(marker).substr(8));
     const uint32_t version = load_le<uint32_t>(in + kAtVersion);
     if (version != kTreeFileVersion)
-        throw fail("format version " + std::to_string(version) + ", this library reads " + std::to_string(kTreeFileVersion));
+        throw fail("format version " + std::to_string(version) + ", this library reads " +
+                   std::to_string(kTreeFileVersion));
     const uint32_t header_size = load_le<uint32_t>(in + kAtHeaderSize);
     const uint32_t node_record_size = load_le<uint32_t>(in + kAtNodeRecordSize);
     const uint32_t primitive_record_size = load_le<uint32_t>(in + kAtPrimitiveRecordSize);
-    if (header_size != kHeaderSize || node_record_size != kNodeRecordSize || primitive_record_size != kPrimitiveRecordSize)
+    if (header_size != kHeaderSize || node_record_size != kNodeRecordSize ||
+        primitive_record_size != kPrimitiveRecordSize)
         throw fail("record sizes " + std::to_string(header_size) + "/" + std::to_string(node_record_size) + "/" +
                    std::to_string(primitive_record_size) + " bytes (header/node/primitive id), version " +
                    std::to_string(kTreeFileVersion) + " has " + std::to_string(kHeaderSize) + "/" +
@@ -362,8 +369,8 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
         const uint64_t room = size > layout.nodes + 8 ? (size - layout.nodes - 8) / kNodeRecordSize : 0;
         throw fail("truncated: the header says " + std::to_string(node_count) + " nodes and " +
                    std::to_string(primitive_count) + " primitive ids (" + std::to_string(layout.size) +
-                   " bytes), the file has " + std::to_string(size) + " bytes (room for at most " + std::to_string(room) +
-                   " nodes)");
+                   " bytes), the file has " + std::to_string(size) + " bytes (room for at most " +
+                   std::to_string(room) + " nodes)");
     }
     if (size > layout.size)
         throw fail(std::to_string(size - layout.size) + " bytes past the end the header describes (" +
@@ -371,7 +378,8 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
                    std::to_string(layout.size) + " bytes)");
     const uint64_t file_size = load_le<uint64_t>(in + kAtFileSize);
     if (file_size != size)
-        throw fail("the header says the file has " + std::to_string(file_size) + " bytes, it has " + std::to_string(size));
+        throw fail("the header says the file has " + std::to_string(file_size) + " bytes, it has " +
+                   std::to_string(size));
     const uint64_t stored_checksum = load_le<uint64_t>(in + layout.checksum);
     const uint64_t checksum = hash_bytes(in, layout.checksum, kChecksumSeed);
     if (stored_checksum != checksum)
@@ -415,7 +423,8 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
         for (size_t i = 0; i < primitive_count; ++i)
             bvh.primitives[i] = load_le<uint32_t>(in + layout.primitives + kPrimitiveRecordSize * i);
     }
-    if (const std::string problem = tree_problem(bvh, triangles); !problem.empty()) throw fail("invalid tree: " + problem);
+    if (const std::string problem = tree_problem(bvh, triangles); !problem.empty())
+        throw fail("invalid tree: " + problem);
 
     if (info) {
         info->format_version = version;
@@ -442,7 +451,8 @@ void save_bvh(const std::string& path, const Bvh& bvh, std::span<const Triangle>
     File file(std::fopen(path.c_str(), "wb"));
     if (!file) throw Error(path + ": cannot open for writing (" + std::strerror(errno) + ")");
     const bool written = std::fwrite(bytes.data(), 1, bytes.size(), file.get()) == bytes.size();
-    if (!written || std::fclose(file.release()) != 0) throw Error(path + ": write failed (" + std::strerror(errno) + ")");
+    if (!written || std::fclose(file.release()) != 0)
+        throw Error(path + ": write failed (" + std::strerror(errno) + ")");
 }
 
 Bvh load_bvh(const std::string& path, std::span<const Triangle> triangles, TreeFileInfo* info) {

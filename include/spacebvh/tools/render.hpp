@@ -36,8 +36,7 @@ struct Image {
 // Headlight shading: grey level from |dot(geometric normal, ray direction)|, a flat background
 // colour for misses. Rows are traced in parallel on the calling thread's oneTBB arena.
 // Throws Error for a zero or absurd image size (more than 16384 on a side) or a bad camera.
-Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
-                    uint32_t height);
+Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height);
 
 enum class HeatmapQuantity {
     work,              // nodes visited + triangles tested (default)
@@ -72,8 +71,8 @@ struct HeatmapInfo {
 
 // Per-pixel traversal cost (closest-hit primary rays) in a perceptual colour ramp (viridis-like,
 // dark = cheap, yellow = expensive). The image is width x (height + legend rows).
-Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
-                     uint32_t height, HeatmapInfo* info = nullptr, const HeatmapOptions& options = {});
+Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height,
+                     HeatmapInfo* info = nullptr, const HeatmapOptions& options = {});
 
 // The heat map's colour ramp at t in [0, 1] (clamped).
 std::array<uint8_t, 3> heatmap_colour(double t);

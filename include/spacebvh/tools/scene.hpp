@@ -22,9 +22,7 @@ struct SceneTransform {
     float scale = 1.0f;
     Vec3 translate{0.0f};
 
-    bool is_identity() const {
-        return rotate_degrees == Vec3(0.0f) && scale == 1.0f && translate == Vec3(0.0f);
-    }
+    bool is_identity() const { return rotate_degrees == Vec3(0.0f) && scale == 1.0f && translate == Vec3(0.0f); }
     Vec3 apply(Vec3 p) const;
     // Why this transform cannot be applied ("scale must be a finite non-zero number", "translate must
     // be finite"), or nullptr when it can. The CLI and the Python module refuse such transforms with it.

@@ -15,7 +15,6 @@
 
 namespace spacebvh::tools {
 
-
 // The arbiter: the closest exact hit over every triangle (brute force), or occlusion.
 HitRecord arbiter_closest_hit(const Scene& scene, const Ray& ray);
 HitRecord arbiter_occlusion(const Scene& scene, const Ray& ray);
@@ -39,7 +38,7 @@ struct VerificationReport {
 // Compares our answers with a reference ray by ray; every disagreement goes to the arbiter
 // (closest hit or occlusion as `occlusion` says). Parallel over the calling thread's arena.
 VerificationReport verify_against_reference(const Scene& scene, std::span<const Ray> rays,
-                                            std::span<const HitRecord> ours,
-                                            std::span<const HitRecord> reference, bool occlusion);
+                                            std::span<const HitRecord> ours, std::span<const HitRecord> reference,
+                                            bool occlusion);
 
 }  // namespace spacebvh::tools

@@ -11,7 +11,9 @@
 namespace spacebvh::builders {
 namespace {
 
-double area_weighted(float cost, const ReferenceSummary& summary) { return double(cost) * double(summary.bounds.area()); }
+double area_weighted(float cost, const ReferenceSummary& summary) {
+    return double(cost) * double(summary.bounds.area());
+}
 
 }  // namespace
 
@@ -37,7 +39,8 @@ double Lookahead::greedy_subtree_cost(std::span<Reference> storage, uint32_t cou
 }
 
 double Lookahead::split_subtree_cost(std::span<Reference> storage, uint32_t count, Split split,
-                                     const ReferenceSummary& summary, uint32_t node_depth, uint32_t child_levels) const {
+                                     const ReferenceSummary& summary, uint32_t node_depth,
+                                     uint32_t child_levels) const {
     const CostModel& cost = search_.cost();
     search_.order_for_apply(storage.first(count));
     const std::optional<ChildRanges> children = search_.apply(storage, count, split, summary);
@@ -47,13 +50,14 @@ double Lookahead::split_subtree_cost(std::span<Reference> storage, uint32_t coun
     const std::span<Reference> right_storage = storage.subspan(children->left_capacity, children->right_capacity);
     double left_cost = 0, right_cost = 0;
     auto price_left = [&] {
-        left_cost = greedy_subtree_cost(left_storage, children->left_count,
-                                        summarize(left_storage.first(children->left_count)), node_depth + 1, child_levels);
+        left_cost =
+            greedy_subtree_cost(left_storage, children->left_count, summarize(left_storage.first(children->left_count)),
+                                node_depth + 1, child_levels);
     };
     auto price_right = [&] {
-        right_cost = greedy_subtree_cost(right_storage, children->right_count,
-                                         summarize(right_storage.first(children->right_count)), node_depth + 1,
-                                         child_levels);
+        right_cost =
+            greedy_subtree_cost(right_storage, children->right_count,
+                                summarize(right_storage.first(children->right_count)), node_depth + 1, child_levels);
     };
     if (count >= kParallelSubtreeThreshold) {
         tbb::parallel_invoke(price_left, price_right);
@@ -69,22 +73,22 @@ LookaheadChoice Lookahead::choose(std::span<Reference> storage, uint32_t count, 
     const std::span<Reference> references = storage.first(count);
     const CostModel& cost = search_.cost();
     const bool must_split = search_.must_split(count);
-    const std::vector<Split> candidates = candidates_per_axis_ == 0
-                                              ? search_.cheapest_per_space(references, summary, storage.size())
-                                              : search_.candidates(references, summary, storage.size(), candidates_per_axis_);
+    const std::vector<Split> candidates =
+        candidates_per_axis_ == 0 ? search_.cheapest_per_space(references, summary, storage.size())
+                                  : search_.candidates(references, summary, storage.size(), candidates_per_axis_);
 
     // The greedy decision, exactly as SplitSearch::greedy_decision makes it (candidates[0] is the
     // cheapest split).
     std::optional<Split> greedy;
     const bool split_pays = !candidates.empty() && candidates.front().cost < cost.leaf_cost(count);
-    if (must_split || split_pays)
-        greedy = candidates.empty() ? median_split(references, summary) : candidates.front();
+    if (must_split || split_pays) greedy = candidates.empty() ? median_split(references, summary) : candidates.front();
 
     LookaheadChoice choice;
     // Nothing to compare (one search space, or the others offer nothing here, and no leaf option):
     // the greedy decision, unpriced. Pricing it would build its whole subtree for nothing.
     const bool greedy_is_first_candidate = greedy && !candidates.empty();
-    const size_t alternatives = (greedy && !must_split ? 1 : 0) + candidates.size() - (greedy_is_first_candidate ? 1 : 0);
+    const size_t alternatives =
+        (greedy && !must_split ? 1 : 0) + candidates.size() - (greedy_is_first_candidate ? 1 : 0);
     if (alternatives == 0) {
         choice.split = greedy;
         choice.options = 1;

@@ -64,8 +64,8 @@ public:
 private:
     // Applies `split` to storage and prices the node as an inner node over its children's greedy
     // subtrees, each `child_levels` levels deep.
-    double split_subtree_cost(std::span<Reference> storage, uint32_t count, Split split, const ReferenceSummary& summary,
-                              uint32_t node_depth, uint32_t child_levels) const;
+    double split_subtree_cost(std::span<Reference> storage, uint32_t count, Split split,
+                              const ReferenceSummary& summary, uint32_t node_depth, uint32_t child_levels) const;
     void poll_cancel() const;
 
     const SplitSearch& search_;

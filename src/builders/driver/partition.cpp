@@ -44,8 +44,10 @@ uint32_t partition_in_order(std::span<Reference> references, uint32_t expected_r
     right.reserve(expected_right);
     auto left_end = references.begin();
     for (const Reference& reference : references) {
-        if (goes_left(reference)) *left_end++ = reference;
-        else right.push_back(reference);
+        if (goes_left(reference))
+            *left_end++ = reference;
+        else
+            right.push_back(reference);
     }
     std::copy(right.begin(), right.end(), left_end);
     return uint32_t(left_end - references.begin());
@@ -112,7 +114,8 @@ ChildRanges apply_spatial_split(std::span<Reference> storage, uint32_t count, co
             Placement placement = split.unsplit ? cheapest_placement(costs) : Placement::both;
             if (placement == Placement::both && duplicates_left == 0) placement = cheaper_side(costs);
             if (placement == Placement::both) {
-                auto [left_piece, right_piece] = split_reference(reference, triangles[reference.primitive], split.axis, split.position);
+                auto [left_piece, right_piece] =
+                    split_reference(reference, triangles[reference.primitive], split.axis, split.position);
                 const bool has_left = !left_piece.bounds.is_empty(), has_right = !right_piece.bounds.is_empty();
                 if (has_left && has_right) {
                     left_from_straddlers.push_back(left_piece);
@@ -147,8 +150,8 @@ ChildRanges apply_grid_split(std::span<Reference> storage, uint32_t count, const
     right.reserve(split.right_count);
     for (uint32_t i = 0; i < count; ++i) {
         const Reference& reference = storage[i];
-        const auto [left_piece, right_piece] = place_in_grid_children(reference, triangles[reference.primitive],
-                                                                      split.left_region, split.right_region);
+        const auto [left_piece, right_piece] =
+            place_in_grid_children(reference, triangles[reference.primitive], split.left_region, split.right_region);
         if (!left_piece.bounds.is_empty()) left.push_back(left_piece);
         if (!right_piece.bounds.is_empty()) right.push_back(right_piece);
     }

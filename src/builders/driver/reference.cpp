@@ -12,8 +12,7 @@ namespace spacebvh::builders {
 std::vector<Reference> make_references(std::span<const Triangle> triangles) {
     std::vector<Reference> references(triangles.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, references.size(), 4096), [&](const auto& range) {
-        for (size_t i = range.begin(); i != range.end(); ++i)
-            references[i] = {triangles[i].bounds(), uint32_t(i)};
+        for (size_t i = range.begin(); i != range.end(); ++i) references[i] = {triangles[i].bounds(), uint32_t(i)};
     });
     return references;
 }

@@ -51,14 +51,14 @@ struct Split {
     SplitKind kind = SplitKind::none;
     float cost = kInfinity;
     int axis = 0;
-    float position = 0;                   // spatial: the plane
-    Reference tie;                        // object_sorted: the first reference of the right child
-    ObjectBinning binning;                // object_binned
-    uint32_t bin = 0;                     // object_binned: first bin of the right child
-    AABB left_bounds, right_bounds;       // boxes of the children this split makes
+    float position = 0;              // spatial: the plane
+    Reference tie;                   // object_sorted: the first reference of the right child
+    ObjectBinning binning;           // object_binned
+    uint32_t bin = 0;                // object_binned: first bin of the right child
+    AABB left_bounds, right_bounds;  // boxes of the children this split makes
     uint32_t left_count = 0, right_count = 0;
-    bool unsplit = false;                 // spatial: try reference unsplitting when applying
-    AABB left_region, right_region;       // grid: the child boxes references are assigned to
+    bool unsplit = false;            // spatial: try reference unsplitting when applying
+    AABB left_region, right_region;  // grid: the child boxes references are assigned to
 
     bool is_valid() const { return kind != SplitKind::none && cost < kInfinity; }
 };
@@ -87,8 +87,8 @@ using CentroidOrders = std::array<std::span<const Reference>, 3>;
 struct NodeContext {
     std::span<const Reference> references;
     const ReferenceSummary& summary;
-    size_t capacity;   // references this node's subtree may hold (its share of the reference budget)
-    float root_area;   // SA(root), for gates relative to the scene
+    size_t capacity;           // references this node's subtree may hold (its share of the reference budget)
+    float root_area;           // SA(root), for gates relative to the scene
     const Split& best_so_far;  // the cheapest split of the search spaces evaluated before this one
     bool must_split = false;   // too many references for a leaf: split even if no split pays
     CentroidOrders sorted{};   // the references in centroid order per axis, when the driver keeps them
@@ -147,7 +147,8 @@ public:
     virtual bool reads_centroid_orders() const { return false; }
     // The `per_axis` cheapest configurations on each axis, axis by axis and cheapest first; the first
     // cheapest of them is find()'s split. A search space without several candidates offers find()'s.
-    virtual std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t /*per_axis*/) const {
+    virtual std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost,
+                                               uint32_t /*per_axis*/) const {
         Split split = find(node, cost);
         if (!split.is_valid()) return {};
         return {split};

@@ -8,10 +8,11 @@
 namespace spacebvh::builders {
 
 Split SplitSearch::cheapest(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
-                           const CentroidOrders& sorted) const {
+                            const CentroidOrders& sorted) const {
     Split best;
     for (const auto& search_space : search_spaces_) {
-        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size()), sorted};
+        const NodeContext context{references, summary, capacity, root_area_, best, must_split(references.size()),
+                                  sorted};
         Split candidate = search_space->find(context, cost_);
         if (candidate.cost < best.cost) best = candidate;
     }
@@ -47,16 +48,17 @@ std::vector<Split> SplitSearch::candidates(std::span<const Reference> references
     });
 }
 
-std::vector<Split> SplitSearch::cheapest_per_space(std::span<const Reference> references, const ReferenceSummary& summary,
-                                                   size_t capacity) const {
+std::vector<Split> SplitSearch::cheapest_per_space(std::span<const Reference> references,
+                                                   const ReferenceSummary& summary, size_t capacity) const {
     return collect(references, summary, capacity, [&](const SplitFinder& space, const NodeContext& context) {
         const Split split = space.find(context, cost_);
         return split.is_valid() ? std::vector<Split>{split} : std::vector<Split>{};
     });
 }
 
-std::optional<Split> SplitSearch::greedy_decision(std::span<const Reference> references, const ReferenceSummary& summary,
-                                                  size_t capacity, const CentroidOrders& sorted) const {
+std::optional<Split> SplitSearch::greedy_decision(std::span<const Reference> references,
+                                                  const ReferenceSummary& summary, size_t capacity,
+                                                  const CentroidOrders& sorted) const {
     const size_t count = references.size();
     const Split split = cheapest(references, summary, capacity, sorted);
     const bool split_pays = split.is_valid() && split.cost < cost_.leaf_cost(count);

@@ -56,8 +56,8 @@ public:
 
     // Every search space's `per_axis` cheapest splits on each axis (SplitFinder::find_candidates),
     // with cheapest()'s split first.
-    std::vector<Split> candidates(std::span<const Reference> references, const ReferenceSummary& summary, size_t capacity,
-                                  uint32_t per_axis) const;
+    std::vector<Split> candidates(std::span<const Reference> references, const ReferenceSummary& summary,
+                                  size_t capacity, uint32_t per_axis) const;
 
     // Each search space's cheapest split (the invalid ones left out), cheapest()'s split first.
     std::vector<Split> cheapest_per_space(std::span<const Reference> references, const ReferenceSummary& summary,

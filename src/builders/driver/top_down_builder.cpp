@@ -40,7 +40,7 @@ struct TopDownBuilder::Impl {
     const Lookahead& whole_subtree_lookahead;  // for nodes of at least `top_node_references`
     const TerminationTerm& termination;        // may be disabled (no segments)
     size_t top_node_references = 0;            // 0: no node looks ahead to the leaves
-    std::vector<Reference> references;  // the storage of all subtrees, size = root capacity
+    std::vector<Reference> references;         // the storage of all subtrees, size = root capacity
     // Centroid orders for the object sweep, kept when a search space reads them: then every node's
     // references are in CentroidOrder{x} in `references`, and the same references are in
     // CentroidOrder{y} and {z} at the same places in these two copies, so that no node sorts
@@ -63,8 +63,8 @@ struct TopDownBuilder::Impl {
     }
 
     // `rays`: the termination segments that meet the node (empty when the term is off).
-    void build_subtree(uint32_t slot, uint32_t begin, uint32_t count, uint32_t capacity, const ReferenceSummary& summary,
-                       uint32_t depth, const std::vector<uint32_t>& rays) {
+    void build_subtree(uint32_t slot, uint32_t begin, uint32_t count, uint32_t capacity,
+                       const ReferenceSummary& summary, uint32_t depth, const std::vector<uint32_t>& rays) {
         SlotNode& node = slots[slot];
         node.bounds = summary.bounds;
         node.begin = begin;
@@ -105,7 +105,8 @@ struct TopDownBuilder::Impl {
         }
 
         auto build_left = [&] {
-            build_subtree(slot + 1, begin, children.left_count, children.left_capacity, left_summary, depth + 1, left_rays);
+            build_subtree(slot + 1, begin, children.left_count, children.left_capacity, left_summary, depth + 1,
+                          left_rays);
         };
         auto build_right = [&] {
             build_subtree(node.right_slot, right_begin, children.right_count, children.right_capacity, right_summary,
@@ -131,8 +132,10 @@ struct TopDownBuilder::Impl {
     // Runs job(axis) for the three orders (0 = x, `references`; 1 = y, 2 = z), in parallel for big nodes.
     template <class Job>
     static void for_each_order(uint32_t count, Job&& job) {
-        if (count >= kParallelSubtreeThreshold) tbb::parallel_for(0, 3, job);
-        else for (int axis = 0; axis < 3; ++axis) job(axis);
+        if (count >= kParallelSubtreeThreshold)
+            tbb::parallel_for(0, 3, job);
+        else
+            for (int axis = 0; axis < 3; ++axis) job(axis);
     }
 
     // The children's orders, once apply_split has put the children in `references` (`kind`: the
@@ -141,7 +144,8 @@ struct TopDownBuilder::Impl {
                       const ChildRanges& children) {
         const bool object_split = kind == SplitKind::object_sorted || kind == SplitKind::object_binned;
         if (object_split && split.kind == kind) return split_orders_alike(begin, count, capacity, split, children);
-        if (kind == SplitKind::spatial && split.kind == kind) return merge_pieces_into_orders(begin, count, split, children);
+        if (kind == SplitKind::spatial && split.kind == kind)
+            return merge_pieces_into_orders(begin, count, split, children);
         sort_orders_again(begin, children);
     }
 
@@ -150,7 +154,8 @@ struct TopDownBuilder::Impl {
     void split_orders_alike(uint32_t begin, uint32_t count, uint32_t capacity, const Split& split,
                             const ChildRanges& children) {
         auto split_copy = [&](int k) {
-            const ChildRanges same = apply_split({other_orders[k].data() + begin, capacity}, count, split, builder.triangles_);
+            const ChildRanges same =
+                apply_split({other_orders[k].data() + begin, capacity}, count, split, builder.triangles_);
             if (same.left_count != children.left_count || same.left_capacity != children.left_capacity)
                 throw Error("internal: the centroid orders split differently");
         };
@@ -237,7 +242,8 @@ struct TopDownBuilder::Impl {
             for (uint32_t i = node.begin; i < node.begin + node.count; ++i)
                 bvh.primitives.push_back(references[i].primitive);
             std::sort(bvh.primitives.begin() + first, bvh.primitives.end());
-            bvh.primitives.erase(std::unique(bvh.primitives.begin() + first, bvh.primitives.end()), bvh.primitives.end());
+            bvh.primitives.erase(std::unique(bvh.primitives.begin() + first, bvh.primitives.end()),
+                                 bvh.primitives.end());
             out.first = uint32_t(first);
             out.reference_count = uint32_t(bvh.primitives.size() - first);
             return;
@@ -282,16 +288,20 @@ Bvh TopDownBuilder::build(std::vector<Reference> references, size_t capacity) {
             ? std::max<size_t>(2, size_t(std::ceil(double(options_.lookahead_top_share) * double(count))))
             : 0;
     const TerminationTerm termination(options_.termination ? *options_.termination : TerminationConfig{});
-    Impl impl{*this, search, lookahead, whole_subtree_lookahead, termination, top_node_references, std::move(references)};
+    Impl impl{
+        *this, search, lookahead, whole_subtree_lookahead, termination, top_node_references, std::move(references)};
     impl.input_count = count;
     impl.references.resize(capacity);
     impl.keeps_orders = search.reads_centroid_orders();
     if (impl.keeps_orders) {
         impl.other_orders = {impl.references, impl.references};
-        Impl::for_each_order(uint32_t(count), [&](int axis) { sort_in_centroid_order({impl.order_data(axis), count}, axis); });
+        Impl::for_each_order(uint32_t(count), [&](int axis) {
+            sort_in_centroid_order({impl.order_data(axis), count}, axis);
+        });
     }
     impl.slots.resize(2 * capacity - 1);
-    const std::vector<uint32_t> root_rays = termination.enabled() ? termination.meeting(root.bounds, nullptr) : std::vector<uint32_t>{};
+    const std::vector<uint32_t> root_rays =
+        termination.enabled() ? termination.meeting(root.bounds, nullptr) : std::vector<uint32_t>{};
     impl.build_subtree(0, 0, uint32_t(count), uint32_t(capacity), root, 0, root_rays);
 
     size_t node_count = 0, leaf_references = 0;

@@ -30,8 +30,8 @@
 // Each node keeps the list of segments meeting its box, so a box inside it is priced among those.
 //
 // Iterations stop at the cap, when no node is left unsettled, or when the last 20 (5 % each: a batch's
-// worth of every node) together gain less than 0.01 % of the inner nodes' area. Every applied move lowers the SAH, so the result is never worse
-// than the input, and the same input gives the same tree for any thread count.
+// worth of every node) together gain less than 0.01 % of the inner nodes' area. Every applied move lowers the SAH, so
+// the result is never worse than the input, and the same input gives the same tree for any thread count.
 #pragma once
 
 #include <atomic>

@@ -44,7 +44,8 @@ void Optimizer::search_subtree(uint32_t node, uint32_t top, uint32_t pivot, doub
             // candidate and its subtree without scanning the larger list.
             const auto& candidate_list = lists_[candidate];
             size_t outside = 0;
-            for (uint32_t i : lists_[node]) outside += !std::binary_search(candidate_list.begin(), candidate_list.end(), i);
+            for (uint32_t i : lists_[node])
+                outside += !std::binary_search(candidate_list.begin(), candidate_list.end(), i);
             const double least_price = price_[candidate] + double(outside) +
                                        area_weight_ * (area_in_double(merged) - area_in_double(bounds_[candidate]));
             const bool may_win = !(top_is_sibling && candidate == top) && base_gain - induced - least_price > best.gain;
@@ -150,7 +151,8 @@ std::optional<double> Optimizer::price_move(uint32_t node, uint32_t destination)
     // among the segments of the one above it (the first inside the meeting node's box).
     const AABB& node_box = bounds_[node];
     double induced = 0.0, merged_price = 0.0;
-    std::span<const uint32_t> superset = sampled_ ? std::span<const uint32_t>(lists_[meeting]) : std::span<const uint32_t>{};
+    std::span<const uint32_t> superset =
+        sampled_ ? std::span<const uint32_t>(lists_[meeting]) : std::span<const uint32_t>{};
     for (size_t k = path_.size(); k-- > 0;) {
         const uint32_t on_the_way = path_[k];
         const AABB merged = merge(bounds_[on_the_way], node_box);
@@ -160,8 +162,10 @@ std::optional<double> Optimizer::price_move(uint32_t node, uint32_t destination)
         } else {
             std::vector<uint32_t>& meeting_list = path_lists_[k % 2];
             meeting_list.clear();
-            merged_price = price_among(merged, superset, sampled_ ? std::span<const uint32_t>(lists_[on_the_way]) : std::span<const uint32_t>{},
-                                       sampled_ ? &meeting_list : nullptr);
+            merged_price =
+                price_among(merged, superset,
+                            sampled_ ? std::span<const uint32_t>(lists_[on_the_way]) : std::span<const uint32_t>{},
+                            sampled_ ? &meeting_list : nullptr);
             superset = meeting_list;
         }
         if (k > 0) induced = induced + (merged_price - price_[on_the_way]);

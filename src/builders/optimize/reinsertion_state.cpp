@@ -137,7 +137,9 @@ std::vector<uint32_t> Optimizer::select_candidates(size_t count) const {
     for (uint32_t i = 0; i < bounds_.size(); ++i)
         if (depth_[i] >= 2 && !settled_[i]) eligible.push_back({price_[i], i});
     count = std::min(count, eligible.size());
-    auto larger_first = [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); };
+    auto larger_first = [](const auto& a, const auto& b) {
+        return a.first > b.first || (a.first == b.first && a.second < b.second);
+    };
     std::nth_element(eligible.begin(), eligible.begin() + count, eligible.end(), larger_first);
     std::sort(eligible.begin(), eligible.begin() + count, larger_first);
     std::vector<uint32_t> candidates(count);

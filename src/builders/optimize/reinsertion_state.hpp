@@ -117,7 +117,8 @@ private:
     double price_inside(const AABB& box, uint32_t node) const {
         if (box == bounds_[node]) return price_[node];
         // Without segments lists_ is empty (indexing it would be undefined): the area part alone.
-        return price_among(box, sampled_ ? std::span<const uint32_t>(lists_[node]) : std::span<const uint32_t>{}, {}, nullptr);
+        return price_among(box, sampled_ ? std::span<const uint32_t>(lists_[node]) : std::span<const uint32_t>{}, {},
+                           nullptr);
     }
     void search_subtree(uint32_t node, uint32_t top, uint32_t pivot, double base_gain, uint32_t depth_shift,
                         bool top_is_sibling, Move& best, SearchScratch& scratch) const;

@@ -102,7 +102,8 @@ private:
         std::array<DVec, 3> p;
         for (int i = 0; i < 3; ++i) {
             const auto& w = piece.corners[i];
-            for (int k = 0; k < 3; ++k) p[i][k] = w[0] * double(t.v0[k]) + w[1] * double(t.v1[k]) + w[2] * double(t.v2[k]);
+            for (int k = 0; k < 3; ++k)
+                p[i][k] = w[0] * double(t.v0[k]) + w[1] * double(t.v1[k]) + w[2] * double(t.v2[k]);
         }
         return p;
     }

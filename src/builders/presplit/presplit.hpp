@@ -77,7 +77,8 @@ inline constexpr uint32_t kMaxPresplitDepth = 24;
 // and hence the output do not depend on anything but the input. Pops stop when the heap is empty
 // or the extra references reach the budget; each split adds (parts - 1) references.
 template <class Policy>
-std::vector<Reference> greedy_presplit(std::span<const Triangle> triangles, const PresplitOptions& options, const Policy& policy) {
+std::vector<Reference> greedy_presplit(std::span<const Triangle> triangles, const PresplitOptions& options,
+                                       const Policy& policy) {
     using Piece = typename Policy::Piece;
     const size_t n = triangles.size();
     if (n == 0) return {};

@@ -172,8 +172,8 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, uint32_t m
             const AABB left_box = to_box(left), right_box = to_box(suffix[i]);
             const float split_cost = cost.split_cost(node.bounds, left_box, left_count, right_box, suffix_counts[i]);
             if (split_cost < sink.threshold(axis)) {
-                Split split =
-                    make_split(SplitKind::object_binned, split_cost, axis, left_box, left_count, right_box, suffix_counts[i]);
+                Split split = make_split(SplitKind::object_binned, split_cost, axis, left_box, left_count, right_box,
+                                         suffix_counts[i]);
                 split.binning = binning[axis];
                 split.bin = i;
                 sink.offer(split);

@@ -12,7 +12,8 @@ public:
     explicit BinnedObjectSplitFinder(uint32_t bins) : bins_(bins) {}
     const char* name() const override { return "object-binned"; }
     Split find(const NodeContext& node, const CostModel& cost) const override;
-    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t per_axis) const override;
+    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost,
+                                       uint32_t per_axis) const override;
 
 private:
     uint32_t bins_;

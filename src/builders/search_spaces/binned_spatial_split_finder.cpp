@@ -30,7 +30,6 @@ struct SpatialBinning {
     float plane(uint32_t i) const { return i == bins ? origin + width * float(bins) : origin + width * float(i); }
 };
 
-
 // Boxes and enter/exit counts per bin, for the three axes at once (one pass over the references).
 // Merging is exact (min/max, integer sums), so a parallel reduction gives the same bins whatever
 // the thread count.
@@ -83,7 +82,8 @@ struct SpatialBins {
                        uint32_t last, const SpatialBinning& binning) {
         const int axis = binning.axis;
         std::vector<SimdBox>& boxes = bounds[axis];
-        const __m128 on_axis = _mm_castsi128_ps(_mm_setr_epi32(axis == 0 ? -1 : 0, axis == 1 ? -1 : 0, axis == 2 ? -1 : 0, 0));
+        const __m128 on_axis =
+            _mm_castsi128_ps(_mm_setr_epi32(axis == 0 ? -1 : 0, axis == 1 ? -1 : 0, axis == 2 ? -1 : 0, 0));
         const float axis_lo = limit_box.lo[axis], axis_hi = limit_box.hi[axis];
         // The box of points lo..hi clamped into the reference's bounds, at position x on the axis.
         auto clamped = [&](__m128 lo, __m128 hi, float x) {
@@ -117,7 +117,8 @@ struct SpatialBins {
                 while (bin < last && binning.plane(bin + 1) < x) ++bin;
             }
             // Clamped into the slab, so always in it.
-            const float clamped_x = std::clamp(std::clamp(x, axis_lo, axis_hi), binning.plane(bin), binning.plane(bin + 1));
+            const float clamped_x =
+                std::clamp(std::clamp(x, axis_lo, axis_hi), binning.plane(bin), binning.plane(bin + 1));
             const __m128 point = simd(vertex);
             boxes[bin].extend(clamped(point, point, clamped_x));
         }
@@ -139,7 +140,9 @@ struct SpatialBins {
                 _mm_add_ps(short_start, _mm_mul_ps(short_edge, _mm_set1_ps(std::clamp(t_short, 0.0f, 1.0f))));
             return SimdBox{_mm_min_ps(on_long, on_short), _mm_max_ps(on_long, on_short)};
         };
-        auto lower_segment = [&](float plane) { return segment_at(plane, low_point, lower_edge, (plane - x_low) * inverse_lower); };
+        auto lower_segment = [&](float plane) {
+            return segment_at(plane, low_point, lower_edge, (plane - x_low) * inverse_lower);
+        };
         auto upper_segment = [&](float plane) {
             return segment_at(plane, middle_point, upper_edge, (plane - x_middle) * inverse_upper);
         };
@@ -175,7 +178,8 @@ struct SpatialBins {
             const float plane = binning.plane(k);
             SimdBox below, above;  // empty: plane k does not cut the triangle
             if (plane >= x_low && plane <= x_high) {
-                const SimdBox segment = plane <= x_middle && x_middle > x_low ? lower_segment(plane) : upper_segment(plane);
+                const SimdBox segment =
+                    plane <= x_middle && x_middle > x_low ? lower_segment(plane) : upper_segment(plane);
                 if (plane > axis_lo && plane < axis_hi) {  // in both slabs
                     below = above = clamped(segment.lo, segment.hi, plane);
                 } else {
@@ -262,8 +266,8 @@ void bin_and_sweep(const NodeContext& context, const CostModel& cost, std::span<
             // whole to their cheaper side (the budget always holds).
             const float split_cost = cost.split_cost(node, left, left_count, suffix_bounds[i], count_right);
             if (split_cost < sink.threshold(axis))
-                sink.offer(spatial_split(split_cost, axis, binning.plane(i), left, left_count, suffix_bounds[i], count_right,
-                                         options.unsplit));
+                sink.offer(spatial_split(split_cost, axis, binning.plane(i), left, left_count, suffix_bounds[i],
+                                         count_right, options.unsplit));
         }
     }
 }

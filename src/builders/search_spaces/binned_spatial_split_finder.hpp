@@ -27,7 +27,8 @@ public:
         : triangles_(triangles), options_(options) {}
     const char* name() const override { return "spatial-binned"; }
     Split find(const NodeContext& node, const CostModel& cost) const override;
-    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t per_axis) const override;
+    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost,
+                                       uint32_t per_axis) const override;
 
 private:
     std::span<const Triangle> triangles_;

@@ -33,8 +33,8 @@ ContainmentGrid::ContainmentGrid(std::span<const Reference> references, const AA
             for (uint32_t i = 0; i < cells; ++i) planes[i] = lo + float(i) * width;
             planes[cells] = hi;
             // Snapping needs strictly increasing planes; a box too thin for them gets one cell.
-            const bool increasing = std::adjacent_find(planes.begin(), planes.end(), std::greater_equal<float>()) ==
-                                    planes.end();
+            const bool increasing =
+                std::adjacent_find(planes.begin(), planes.end(), std::greater_equal<float>()) == planes.end();
             cells_[axis] = increasing ? cells : 1;
             if (!increasing) planes = {lo, hi};
         }
@@ -52,7 +52,9 @@ ContainmentGrid::ContainmentGrid(std::span<const Reference> references, const AA
             const float scale = last ? float(last) / (planes[last] - planes[0]) : 0.0f;
             // A first guess of the cell, which the loops settle on the planes; 0 where the position is
             // NaN (an infinite difference times a zero scale, on a node spanning more than FLT_MAX).
-            const auto guess = [last](float position) { return position >= 0.0f ? uint32_t(std::min(position, float(last))) : 0u; };
+            const auto guess = [last](float position) {
+                return position >= 0.0f ? uint32_t(std::min(position, float(last))) : 0u;
+            };
             const float x_lo = reference.bounds.lo[axis], x_hi = reference.bounds.hi[axis];
             uint32_t l = guess((x_lo - planes[0]) * scale);
             while (l > 0 && planes[l] > x_lo) --l;
@@ -164,8 +166,8 @@ std::vector<AxisPair> axis_pairs(const ContainmentGrid& grid, int axis) {
         for (uint32_t left_hi = left_lo; left_hi <= last; ++left_hi)
             for (uint32_t right_lo = 0; right_lo <= last; ++right_lo)
                 for (uint32_t right_hi = right_lo; right_hi <= last; ++right_hi) {
-                    if (left_lo != 0 && right_lo != 0) continue;         // the lower face is inherited
-                    if (left_hi != last && right_hi != last) continue;   // the upper face is inherited
+                    if (left_lo != 0 && right_lo != 0) continue;        // the lower face is inherited
+                    if (left_hi != last && right_hi != last) continue;  // the upper face is inherited
                     AxisPair pair;
                     pair.left_lo = uint8_t(left_lo);
                     pair.left_hi = uint8_t(left_hi);
@@ -175,7 +177,8 @@ std::vector<AxisPair> axis_pairs(const ContainmentGrid& grid, int axis) {
                     pair.right = uint16_t(ContainmentGrid::interval_index(right_lo, right_hi));
                     const uint32_t meet_lo = std::max(left_lo, right_lo), meet_hi = std::min(left_hi, right_hi);
                     pair.has_intersection = meet_lo <= meet_hi;
-                    pair.intersection = uint16_t(pair.has_intersection ? ContainmentGrid::interval_index(meet_lo, meet_hi) : 0);
+                    pair.intersection =
+                        uint16_t(pair.has_intersection ? ContainmentGrid::interval_index(meet_lo, meet_hi) : 0);
                     pair.both_full = left_lo == 0 && right_lo == 0 && left_hi == last && right_hi == last;
                     pair.left_lo_plane = grid.plane(axis, left_lo);
                     pair.left_hi_plane = grid.plane(axis, left_hi);
@@ -253,8 +256,8 @@ GridSearchResult search_grid(const ContainmentGrid& grid, const AABB& node, uint
                                     {a.left_hi_plane, b.left_hi_plane, c.left_hi_plane}};
                     const AABB right{{a.right_lo_plane, b.right_lo_plane, c.right_lo_plane},
                                      {a.right_hi_plane, b.right_hi_plane, c.right_hi_plane}};
-                    const GridCounts counts = assign(inside_left, inside_right, inside_both, reference_count,
-                                                     left.area() <= right.area());
+                    const GridCounts counts =
+                        assign(inside_left, inside_right, inside_both, reference_count, left.area() <= right.area());
                     if (counts.left == 0 || counts.right == 0) continue;
                     const float candidate_cost = cost.split_cost(node, left, counts.left, right, counts.right);
                     if (candidate_cost < best.cost) {
@@ -304,12 +307,14 @@ std::pair<Reference, Reference> place_in_grid_children(const Reference& referenc
     const Reference nowhere{AABB{}, reference.primitive};
     const bool in_left = left_region.contains(reference.bounds), in_right = right_region.contains(reference.bounds);
     if (in_left && in_right)
-        return left_region.area() <= right_region.area() ? std::pair{reference, nowhere} : std::pair{nowhere, reference};
+        return left_region.area() <= right_region.area() ? std::pair{reference, nowhere}
+                                                         : std::pair{nowhere, reference};
     if (in_left) return {reference, nowhere};
     if (in_right) return {nowhere, reference};
     // In neither: the parts of the triangle (as restricted by the reference) inside each child.
     const Reference left{clip_triangle_bounds(triangle, intersect(reference.bounds, left_region)), reference.primitive};
-    const Reference right{clip_triangle_bounds(triangle, intersect(reference.bounds, right_region)), reference.primitive};
+    const Reference right{clip_triangle_bounds(triangle, intersect(reference.bounds, right_region)),
+                          reference.primitive};
     if (left.bounds.is_empty() && right.bounds.is_empty()) return {reference, nowhere};  // rounding: keep it whole
     return {left, right};
 }
@@ -337,8 +342,8 @@ Split GridSplitFinder::find(const NodeContext& context, const CostModel& cost) c
     }
     if (left_count == 0 || right_count == 0) return best;
     // Axis 0: a grid split has no plane; the regions below say where references go.
-    best = make_split(SplitKind::grid, cost.split_cost(node, left, left_count, right, right_count), 0, left, left_count, right,
-                      right_count);
+    best = make_split(SplitKind::grid, cost.split_cost(node, left, left_count, right, right_count), 0, left, left_count,
+                      right, right_count);
     best.left_region = left_region;
     best.right_region = right_region;
     return best;

@@ -39,9 +39,9 @@
 namespace spacebvh::builders {
 
 struct GridSearchOptions {
-    float resolution = 1.0f;      // R in G = ceil(R * N^(1/6))
-    uint32_t max_cells = 8;       // cap on G (memory and time grow as G^6)
-    bool split_primitives = true; // clip references in neither child (only where L ∪ R covers the node)
+    float resolution = 1.0f;       // R in G = ceil(R * N^(1/6))
+    uint32_t max_cells = 8;        // cap on G (memory and time grow as G^6)
+    bool split_primitives = true;  // clip references in neither child (only where L ∪ R covers the node)
 };
 
 inline constexpr uint32_t kMaxGridCells = 16;

@@ -73,15 +73,17 @@ void sort_in_centroid_order(std::span<const Reference> references, int axis, std
     if (count > 256) {  // below, std::sort beats clearing the histograms
         radix_sort(keyed, 32 + primitive_bits);
     } else {
-        std::sort(keyed.begin(), keyed.end(), [](const KeyedReference& a, const KeyedReference& b) { return a.key < b.key; });
+        std::sort(keyed.begin(), keyed.end(),
+                  [](const KeyedReference& a, const KeyedReference& b) { return a.key < b.key; });
     }
     for (size_t begin = 0; begin < count;) {
         size_t end = begin + 1;
         while (end < count && keyed[end].key == keyed[begin].key) ++end;
         if (end - begin > 1)
-            std::sort(keyed.begin() + begin, keyed.begin() + end, [&](const KeyedReference& a, const KeyedReference& b) {
-                return order(references[a.index], references[b.index]);
-            });
+            std::sort(keyed.begin() + begin, keyed.begin() + end,
+                      [&](const KeyedReference& a, const KeyedReference& b) {
+                          return order(references[a.index], references[b.index]);
+                      });
         begin = end;
     }
     sorted.resize(count);
@@ -114,7 +116,8 @@ SweepOrder sweep_order(std::span<const Reference> references, const ReferenceSum
     for (int axis = 0; axis < 3; ++axis) {
         if (node.centroid_bounds.lo[axis] == node.centroid_bounds.hi[axis]) continue;  // no cut separates
         order.axes[order.count++] = axis;
-        if (!presorted && !order.first_sorted && std::is_sorted(references.begin(), references.end(), CentroidOrder{axis})) {
+        if (!presorted && !order.first_sorted &&
+            std::is_sorted(references.begin(), references.end(), CentroidOrder{axis})) {
             order.first_sorted = true;
             std::rotate(order.axes.begin(), order.axes.begin() + order.count - 1, order.axes.begin() + order.count);
         }
@@ -170,7 +173,8 @@ void sweep(const NodeContext& context, const CostModel& cost, Sink& sink) {
             if (penalised) {
                 const float overlap_factor = cost.overlap_factor(overlap_fraction(node_extent, left, suffix_bounds[i]));
                 if (overlap_factor == kInfinity) continue;  // C_o = inf: disjoint children only
-                split_cost = cost.split_cost_of_areas(node_area, left_area, i, suffix_area[i], count - i, overlap_factor);
+                split_cost =
+                    cost.split_cost_of_areas(node_area, left_area, i, suffix_area[i], count - i, overlap_factor);
                 if (!(split_cost < sink.threshold(axis))) continue;
             }
             Split split = make_split(SplitKind::object_sorted, split_cost, axis, left.aabb(), uint32_t(i),

@@ -11,7 +11,8 @@ class ObjectSweepSplitFinder final : public SplitFinder {
 public:
     const char* name() const override { return "object-sweep"; }
     Split find(const NodeContext& node, const CostModel& cost) const override;
-    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost, uint32_t per_axis) const override;
+    std::vector<Split> find_candidates(const NodeContext& node, const CostModel& cost,
+                                       uint32_t per_axis) const override;
     // Given NodeContext::sorted, the sweep reads the driver's orders and sorts nothing.
     bool reads_centroid_orders() const override { return true; }
 };

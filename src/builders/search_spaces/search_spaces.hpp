@@ -16,7 +16,8 @@ namespace spacebvh::builders {
 // Object spaces come first (the spatial gate looks at the best object split), then spatial, then grid;
 // on equal cost the earlier finder's split is kept. `allow_unsplitting` and `spatial_gate_alpha` are
 // the preset's rules for the spatial search space.
-std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t search_spaces, std::span<const Triangle> triangles,
+std::vector<std::unique_ptr<SplitFinder>> make_search_spaces(uint32_t search_spaces,
+                                                             std::span<const Triangle> triangles,
                                                              const BuildConfig& config, bool allow_unsplitting,
                                                              float spatial_gate_alpha);
 

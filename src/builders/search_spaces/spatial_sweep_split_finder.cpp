@@ -131,12 +131,10 @@ SpatialSweepPlanes sweep_spatial_planes(std::span<const Reference> references, s
     std::vector<uint32_t> by_lo(count), by_hi(count);
     std::iota(by_lo.begin(), by_lo.end(), 0u);
     std::iota(by_hi.begin(), by_hi.end(), 0u);
-    std::sort(by_lo.begin(), by_lo.end(), [&](uint32_t a, uint32_t b) {
-        return lo_of(a) != lo_of(b) ? lo_of(a) < lo_of(b) : a < b;
-    });
-    std::sort(by_hi.begin(), by_hi.end(), [&](uint32_t a, uint32_t b) {
-        return hi_of(a) != hi_of(b) ? hi_of(a) < hi_of(b) : a < b;
-    });
+    std::sort(by_lo.begin(), by_lo.end(),
+              [&](uint32_t a, uint32_t b) { return lo_of(a) != lo_of(b) ? lo_of(a) < lo_of(b) : a < b; });
+    std::sort(by_hi.begin(), by_hi.end(),
+              [&](uint32_t a, uint32_t b) { return hi_of(a) != hi_of(b) ? hi_of(a) < hi_of(b) : a < b; });
     // Candidate planes: the distinct events strictly inside the node (a plane on the node's faces
     // leaves one child empty).
     sweep.planes.reserve(2 * size_t(count));
@@ -252,10 +250,11 @@ Split SpatialSweepSplitFinder::find(const NodeContext& context, const CostModel&
 
     // The interior study: positions strictly between an event plane and its neighbours.
     const size_t studied = std::min<size_t>(options_.interior_intervals, ranked.size());
-    std::partial_sort(ranked.begin(), ranked.begin() + studied, ranked.end(), [](const Candidate& a, const Candidate& b) {
-        if (a.cost != b.cost) return a.cost < b.cost;
-        return a.axis != b.axis ? a.axis < b.axis : a.plane < b.plane;
-    });
+    std::partial_sort(ranked.begin(), ranked.begin() + studied, ranked.end(),
+                      [](const Candidate& a, const Candidate& b) {
+                          if (a.cost != b.cost) return a.cost < b.cost;
+                          return a.axis != b.axis ? a.axis < b.axis : a.plane < b.plane;
+                      });
     for (size_t r = 0; r < studied; ++r) {
         const int axis = ranked[r].axis;
         const std::vector<float>& planes = sweeps[axis].planes;
@@ -269,9 +268,9 @@ Split SpatialSweepSplitFinder::find(const NodeContext& context, const CostModel&
                 if (!(position > a && position < b)) continue;  // no float strictly inside
                 const SpatialPlaneEvaluation plane = evaluate_spatial_plane(references, triangles_, axis, position);
                 if (plane.left_count == 0 || plane.right_count == 0) continue;
-                consider(cost.split_cost(node, plane.left_bounds, plane.left_count, plane.right_bounds,
-                                         plane.right_count),
-                         axis, position, plane.left_bounds, plane.left_count, plane.right_bounds, plane.right_count);
+                consider(
+                    cost.split_cost(node, plane.left_bounds, plane.left_count, plane.right_bounds, plane.right_count),
+                    axis, position, plane.left_bounds, plane.left_count, plane.right_bounds, plane.right_count);
             }
         }
     }

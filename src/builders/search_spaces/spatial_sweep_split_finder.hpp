@@ -35,10 +35,11 @@
 namespace spacebvh::builders {
 
 struct SpatialSweepOptions {
-    bool unsplit = true;             // reference unsplitting when the split is applied
-    uint32_t interior_samples = 0;   // positions sampled inside each studied interval (0 = events only)
-    uint32_t interior_intervals = 2; // event planes (best first, over all axes) whose neighbouring intervals are sampled
-    float gate_alpha = 0.0f;         // as SpatialSearchOptions::gate_alpha (sbvh)
+    bool unsplit = true;            // reference unsplitting when the split is applied
+    uint32_t interior_samples = 0;  // positions sampled inside each studied interval (0 = events only)
+    uint32_t interior_intervals =
+        2;                    // event planes (best first, over all axes) whose neighbouring intervals are sampled
+    float gate_alpha = 0.0f;  // as SpatialSearchOptions::gate_alpha (sbvh)
 };
 
 // Child boxes and counts of the spatial split at x[axis] = position, computed directly (one pass

@@ -120,8 +120,8 @@ void* create_leaf(RTCThreadLocalAllocator allocator, const RTCBuildPrimitive* pr
 // (RenderKit/embree#328), and it needs valid boxes inside the prim's bounds on both sides: pos is
 // clamped into the bounds, and a side without any part of the triangle gets the flat box where the
 // plane cuts the prim's bounds (a harmless extra reference, merged or never hit).
-void split_primitive(const RTCBuildPrimitive* prim, unsigned dim, float pos, RTCBounds* left_out,
-                     RTCBounds* right_out, void* user) {
+void split_primitive(const RTCBuildPrimitive* prim, unsigned dim, float pos, RTCBounds* left_out, RTCBounds* right_out,
+                     void* user) {
     const BuildContext& context = *static_cast<const BuildContext*>(user);
     const AABB box = to_aabb(*prim);
     const int axis = int(std::min(dim, 2u));
@@ -232,8 +232,9 @@ Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const Build
         check.validate();
     }
     if (quality == EmbreeQuality::low)
-        throw Error("Embree binary trees: quality 'low' (Morton, leaves of one triangle) is not offered; use "
-                    "medium or high");
+        throw Error(
+            "Embree binary trees: quality 'low' (Morton, leaves of one triangle) is not offered; use "
+            "medium or high");
     if (options.limits.max_leaf_size > RTC_BUILD_MAX_PRIMITIVES_PER_LEAF)
         throw Error("Embree binary trees: max leaf size must be at most " +
                     std::to_string(int(RTC_BUILD_MAX_PRIMITIVES_PER_LEAF)) + ", got " +
@@ -327,22 +328,26 @@ bool is_embree_tree(const std::string& builder) {
 uint64_t estimate_embree_tree_memory(uint64_t triangle_count, const std::string& builder, const BuildConfig& options) {
     const bool high = builder == "embree-high";
     const uint64_t capacity =
-        high ? std::max<uint64_t>(triangle_count, uint64_t(double(options.limits.reference_budget) * double(triangle_count)))
+        high ? std::max<uint64_t>(triangle_count,
+                                  uint64_t(double(options.limits.reference_budget) * double(triangle_count)))
              : triangle_count;
     // Per reference: the build primitive, Embree's temporary nodes and leaves (measured on
     // builtin:city:N, about kEmbreeTemporaryBytes), the converted tree (about one 32-byte node and a
     // 4-byte id) and the node array's growth by doubling; and thread stacks and Embree's own buffers.
     constexpr uint64_t kEmbreeTemporaryBytes = 48, kFixedBytes = uint64_t(16) << 20;
-    return kFixedBytes + capacity * (sizeof(RTCBuildPrimitive) + kEmbreeTemporaryBytes + 2 * sizeof(BvhNode) + sizeof(uint32_t));
+    return kFixedBytes +
+           capacity * (sizeof(RTCBuildPrimitive) + kEmbreeTemporaryBytes + 2 * sizeof(BvhNode) + sizeof(uint32_t));
 }
 
 Bvh build_embree_tree(const Scene& scene, const std::string& builder, const BuildConfig& options) {
-    if (!is_embree_tree(builder)) throw Error("'" + builder + "' is not one of Embree's trees (embree-medium, embree-high)");
-    check_memory_estimate("scene '" + scene.name + "' (" + std::to_string(scene.triangles.size()) + " triangles, builder " +
-                              builder + ")",
+    if (!is_embree_tree(builder))
+        throw Error("'" + builder + "' is not one of Embree's trees (embree-medium, embree-high)");
+    check_memory_estimate("scene '" + scene.name + "' (" + std::to_string(scene.triangles.size()) +
+                              " triangles, builder " + builder + ")",
                           estimate_embree_tree_memory(scene.triangles.size(), builder, options),
                           options.limits.memory_limit_bytes);
-    Bvh bvh = build_bvh_with_embree(scene, builder == "embree-high" ? EmbreeQuality::high : EmbreeQuality::medium, options);
+    Bvh bvh =
+        build_bvh_with_embree(scene, builder == "embree-high" ? EmbreeQuality::high : EmbreeQuality::medium, options);
     optimize(bvh, options.reinsertion, options.limits.max_depth, options.hooks);
     return bvh;
 }

@@ -23,9 +23,7 @@ namespace {
 // message there and turn it into an Error after the call (throwing through Embree's C API is not safe).
 thread_local std::string t_last_embree_message;
 
-void on_embree_error(void*, RTCError code, const char* message) {
-    t_last_embree_message = message ? message : "";
-}
+void on_embree_error(void*, RTCError code, const char* message) { t_last_embree_message = message ? message : ""; }
 
 // Net bytes the device has allocated (Embree reports before allocating, after freeing).
 std::atomic<int64_t> g_embree_bytes{0};
@@ -37,17 +35,23 @@ bool on_embree_memory(void*, ssize_t bytes, bool /*post*/) {
 
 const char* error_name(RTCError code) {
     switch (code) {
-        case RTC_ERROR_NONE: return "none";
-        case RTC_ERROR_UNKNOWN: return "unknown error";
-        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-        case RTC_ERROR_CANCELLED: return "cancelled";
+        case RTC_ERROR_NONE:
+            return "none";
+        case RTC_ERROR_UNKNOWN:
+            return "unknown error";
+        case RTC_ERROR_INVALID_ARGUMENT:
+            return "invalid argument";
+        case RTC_ERROR_INVALID_OPERATION:
+            return "invalid operation";
+        case RTC_ERROR_OUT_OF_MEMORY:
+            return "out of memory";
+        case RTC_ERROR_UNSUPPORTED_CPU:
+            return "unsupported CPU";
+        case RTC_ERROR_CANCELLED:
+            return "cancelled";
     }
     return "error";
 }
-
 
 constexpr size_t kChunkRays = 1024;  // as embree-measured.md: oneTBB chunks of 1024 rays
 
@@ -118,9 +122,12 @@ void check_embree(RTCDevice device, const char* what) {
 
 const char* to_string(EmbreeQuality quality) {
     switch (quality) {
-        case EmbreeQuality::low: return "low";
-        case EmbreeQuality::medium: return "medium";
-        case EmbreeQuality::high: return "high";
+        case EmbreeQuality::low:
+            return "low";
+        case EmbreeQuality::medium:
+            return "medium";
+        case EmbreeQuality::high:
+            return "high";
     }
     return "unknown";
 }
@@ -141,7 +148,8 @@ RTCDevice embree_device() {
         const char* config = std::getenv("SPACEBVH_EMBREE_CONFIG");
         RTCDevice d = rtcNewDevice(config);
         if (!d)
-            throw Error("Embree: cannot create a device" + (config ? " with SPACEBVH_EMBREE_CONFIG='" + std::string(config) + "'" : std::string()) +
+            throw Error("Embree: cannot create a device" +
+                        (config ? " with SPACEBVH_EMBREE_CONFIG='" + std::string(config) + "'" : std::string()) +
                         " (error " + std::string(error_name(rtcGetDeviceError(nullptr))) + ")");
         rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
         rtcSetDeviceMemoryMonitorFunction(d, on_embree_memory, nullptr);

@@ -147,9 +147,11 @@ double tree_epo(const Scene& scene, const Bvh& bvh, const CostModel& cost) {
     // Triangle boxes in leaf-slot order, so that the common rejection (a leaf triangle whose box
     // misses n's box) reads memory sequentially instead of gathering vertices.
     std::vector<AABB> slot_bounds(bvh.primitives.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, slot_bounds.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) slot_bounds[i] = scene.triangles[bvh.primitives[i]].bounds();
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, slot_bounds.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              slot_bounds[i] = scene.triangles[bvh.primitives[i]].bounds();
+                      });
     auto in_subtree = [&](uint32_t triangle, uint32_t node) {
         for (uint32_t i = leaf_offsets[triangle]; i < leaf_offsets[triangle + 1]; ++i) {
             if (leaf_orders[i] >= order[node] && leaf_orders[i] <= last[node]) return true;
@@ -165,52 +167,53 @@ double tree_epo(const Scene& scene, const Bvh& bvh, const CostModel& cost) {
     tbb::enumerable_thread_specific<Scratch> scratch;
 
     std::vector<double> contribution(reachable.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, reachable.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-        Scratch& s = scratch.local();
-        if (s.stamp.size() != triangle_count) s.stamp.assign(triangle_count, 0);
-        for (size_t i = range.begin(); i != range.end(); ++i) {
-            const uint32_t n = reachable[i];
-            const BvhNode& node = bvh.nodes[n];
-            const AABB& box = node.bounds;
-            if (box.is_empty()) continue;
-            if (++s.epoch == 0) {  // wrapped: clear the stamps once
-                std::fill(s.stamp.begin(), s.stamp.end(), 0);
-                s.epoch = 1;
-            }
-            double area = 0.0;
-            s.stack.clear();
-            s.stack.push_back(0);
-            while (!s.stack.empty()) {
-                uint32_t m = s.stack.back();
-                s.stack.pop_back();
-                if (m == n) continue;  // n's own subtree is Q(n)
-                const BvhNode& other = bvh.nodes[m];
-                if (!boxes_overlap(other.bounds, box)) continue;
-                if (!other.is_leaf()) {
-                    s.stack.push_back(other.first + 1);
-                    s.stack.push_back(other.first);
-                    continue;
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, reachable.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+            Scratch& s = scratch.local();
+            if (s.stamp.size() != triangle_count) s.stamp.assign(triangle_count, 0);
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                const uint32_t n = reachable[i];
+                const BvhNode& node = bvh.nodes[n];
+                const AABB& box = node.bounds;
+                if (box.is_empty()) continue;
+                if (++s.epoch == 0) {  // wrapped: clear the stamps once
+                    std::fill(s.stamp.begin(), s.stamp.end(), 0);
+                    s.epoch = 1;
                 }
-                for (uint32_t slot = other.first; slot < other.first + other.reference_count; ++slot) {
-                    const AABB& triangle_box = slot_bounds[slot];
-                    if (!boxes_overlap(triangle_box, box)) continue;
-                    uint32_t t = bvh.primitives[slot];
-                    // Referenced once: met only here, and that reference is outside n's subtree, so t
-                    // is not in Q(n). Referenced more often: count it once, and only if no reference
-                    // lies inside n's subtree.
-                    if (leaf_offsets[t + 1] - leaf_offsets[t] > 1) {
-                        if (s.stamp[t] == s.epoch) continue;
-                        s.stamp[t] = s.epoch;
-                        if (in_subtree(t, n)) continue;
+                double area = 0.0;
+                s.stack.clear();
+                s.stack.push_back(0);
+                while (!s.stack.empty()) {
+                    uint32_t m = s.stack.back();
+                    s.stack.pop_back();
+                    if (m == n) continue;  // n's own subtree is Q(n)
+                    const BvhNode& other = bvh.nodes[m];
+                    if (!boxes_overlap(other.bounds, box)) continue;
+                    if (!other.is_leaf()) {
+                        s.stack.push_back(other.first + 1);
+                        s.stack.push_back(other.first);
+                        continue;
                     }
-                    area += box.contains(triangle_box) ? areas[t] : clipped_triangle_area(scene.triangles[t], box);
+                    for (uint32_t slot = other.first; slot < other.first + other.reference_count; ++slot) {
+                        const AABB& triangle_box = slot_bounds[slot];
+                        if (!boxes_overlap(triangle_box, box)) continue;
+                        uint32_t t = bvh.primitives[slot];
+                        // Referenced once: met only here, and that reference is outside n's subtree, so t
+                        // is not in Q(n). Referenced more often: count it once, and only if no reference
+                        // lies inside n's subtree.
+                        if (leaf_offsets[t + 1] - leaf_offsets[t] > 1) {
+                            if (s.stamp[t] == s.epoch) continue;
+                            s.stamp[t] = s.epoch;
+                            if (in_subtree(t, n)) continue;
+                        }
+                        area += box.contains(triangle_box) ? areas[t] : clipped_triangle_area(scene.triangles[t], box);
+                    }
                 }
+                double weight = node.is_leaf() ? double(cost.intersection_cost) * double(distinct_in_leaf(bvh, node))
+                                               : double(cost.traversal_cost);
+                contribution[i] = weight * area;
             }
-            double weight = node.is_leaf() ? double(cost.intersection_cost) * double(distinct_in_leaf(bvh, node))
-                                           : double(cost.traversal_cost);
-            contribution[i] = weight * area;
-        }
-    });
+        });
 
     double epo = 0.0;
     for (double c : contribution) epo += c;  // in node order: deterministic

@@ -79,8 +79,8 @@ bool hits_agree(const HitRecord& a, const HitRecord& b, const Ray& ray, float sc
 }
 
 VerificationReport verify_against_reference(const Scene& scene, std::span<const Ray> rays,
-                                            std::span<const HitRecord> ours,
-                                            std::span<const HitRecord> reference, bool occlusion) {
+                                            std::span<const HitRecord> ours, std::span<const HitRecord> reference,
+                                            bool occlusion) {
     if (ours.size() != rays.size() || reference.size() != rays.size())
         throw Error("verify: " + std::to_string(rays.size()) + " rays but " + std::to_string(ours.size()) +
                     " of our answers and " + std::to_string(reference.size()) + " reference answers");
@@ -93,8 +93,7 @@ VerificationReport verify_against_reference(const Scene& scene, std::span<const 
             if (hits_agree(ours[i], reference[i], rays[i], diagonal)) continue;
             // Only disagreements pay for the brute-force arbiter.
             ++tally.disagreements;
-            const HitRecord truth =
-                occlusion ? arbiter_occlusion(scene, rays[i]) : arbiter_closest_hit(scene, rays[i]);
+            const HitRecord truth = occlusion ? arbiter_occlusion(scene, rays[i]) : arbiter_closest_hit(scene, rays[i]);
             if (!hits_agree(ours[i], truth, rays[i], diagonal)) {
                 ++tally.ours_wrong;
                 tally.add_wrong(i);

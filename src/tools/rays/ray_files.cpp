@@ -28,8 +28,8 @@ namespace {
 constexpr char kRayMagic[8] = {'R', 'E', 'F', 'R', 'A', 'Y', 'S', '1'};
 constexpr char kHitMagic[8] = {'R', 'E', 'F', 'H', 'I', 'T', 'S', '1'};
 constexpr size_t kHeaderBytes = 16;
-constexpr size_t kRayRecordBytes = 32;  // org.xyz, dir.xyz, tmin, tmax
-constexpr size_t kHitRecordBytes = 8;   // t, primitive
+constexpr size_t kRayRecordBytes = 32;        // org.xyz, dir.xyz, tmin, tmax
+constexpr size_t kHitRecordBytes = 8;         // t, primitive
 constexpr size_t kRecordsPerChunk = 1 << 16;  // I/O in chunks, not one huge buffer
 
 void put_u32(unsigned char* out, uint32_t v) {
@@ -64,8 +64,7 @@ FilePtr open_file(const std::string& path, const char* mode) {
 
 // Writes header and records; `encode(i, out)` fills record i.
 template <class Encode>
-void write_records(const std::string& path, const char (&magic)[8], size_t count, size_t record_bytes,
-                   Encode encode) {
+void write_records(const std::string& path, const char (&magic)[8], size_t count, size_t record_bytes, Encode encode) {
     FilePtr f = open_file(path, "wb");
     unsigned char header[kHeaderBytes];
     std::memcpy(header, magic, 8);
@@ -174,7 +173,9 @@ void write_hit_file(const std::string& path, std::span<const HitRecord> hits) {
     });
 }
 
-std::vector<HitRecord> read_hit_file(const std::string& path) { return read_hit_file(open_file(path, "rb").release(), path); }
+std::vector<HitRecord> read_hit_file(const std::string& path) {
+    return read_hit_file(open_file(path, "rb").release(), path);
+}
 
 std::vector<HitRecord> read_hit_file(std::FILE* file, const std::string& path) {
     RecordFile rf = open_records(FilePtr(file), path, kHitMagic, "hit", kHitRecordBytes);

@@ -64,9 +64,12 @@ RayKind parse_ray_kind(const std::string& text) {
 
 const char* to_string(RayKind kind) {
     switch (kind) {
-        case RayKind::random: return "random";
-        case RayKind::primary: return "primary";
-        case RayKind::diffuse: return "diffuse";
+        case RayKind::random:
+            return "random";
+        case RayKind::primary:
+            return "primary";
+        case RayKind::diffuse:
+            return "diffuse";
     }
     return "unknown";
 }
@@ -101,8 +104,8 @@ std::vector<Ray> generate_random_rays(const AABB& scene_bounds, size_t count, ui
 // Spec "primary": a pinhole camera, pixel (x, y) has index y*W + x, row 0 at the top.
 std::vector<Ray> generate_primary_rays(const Camera& camera, uint32_t width, uint32_t height) {
     if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
-        throw Error("primary rays: image size must be between 1 and " + std::to_string(kMaxImageSide) + " on each side, got " +
-                    std::to_string(width) + " x " + std::to_string(height));
+        throw Error("primary rays: image size must be between 1 and " + std::to_string(kMaxImageSide) +
+                    " on each side, got " + std::to_string(width) + " x " + std::to_string(height));
     if (!(camera.fovy_degrees > 0.0f && camera.fovy_degrees < 180.0f))
         throw Error("primary rays: fovy must be in (0, 180) degrees, got " + std::to_string(camera.fovy_degrees));
     const Vec3 forward = normalize3(sub(camera.target, camera.eye));
@@ -152,8 +155,7 @@ std::vector<Ray> generate_diffuse_rays(const Scene& scene, std::span<const Ray> 
         if (!hit.is_hit()) continue;
         if (hit.primitive >= scene.triangles.size())
             throw Error("diffuse rays: primary hit " + std::to_string(i) + " names triangle " +
-                        std::to_string(hit.primitive) + " but the scene has " +
-                        std::to_string(scene.triangles.size()));
+                        std::to_string(hit.primitive) + " but the scene has " + std::to_string(scene.triangles.size()));
         const Ray& primary = primary_rays[i];
         const Triangle& tri = scene.triangles[hit.primitive];
         const Vec3 p = add(primary.org, scale(primary.dir, hit.t));

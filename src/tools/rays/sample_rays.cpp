@@ -62,9 +62,9 @@ std::vector<Ray> area_sample(const Scene& scene, size_t count, uint64_t seed, fl
     hits.reserve(count);
     for (size_t k = 0; k < count; ++k) {
         const double target = double(rng.uniform()) * total;
-        const size_t i = std::min(size_t(std::upper_bound(cumulative_area.begin(), cumulative_area.end(), target) -
-                                          cumulative_area.begin()),
-                                  scene.triangles.size() - 1);
+        const size_t i = std::min(
+            size_t(std::upper_bound(cumulative_area.begin(), cumulative_area.end(), target) - cumulative_area.begin()),
+            scene.triangles.size() - 1);
         float u = rng.uniform(), v = rng.uniform();
         if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
         const Triangle& tri = scene.triangles[i];

@@ -97,7 +97,8 @@ void draw_text(Image& image, int x0, int y0, const std::string& text, int scale,
 
 void fill_rect(Image& image, int x0, int y0, int x1, int y1, std::array<uint8_t, 3> colour) {
     for (int y = std::max(y0, 0); y < std::min(y1, int(image.height)); ++y) {
-        for (int x = std::max(x0, 0); x < std::min(x1, int(image.width)); ++x) image.set_pixel(uint32_t(x), uint32_t(y), colour);
+        for (int x = std::max(x0, 0); x < std::min(x1, int(image.width)); ++x)
+            image.set_pixel(uint32_t(x), uint32_t(y), colour);
     }
 }
 
@@ -159,9 +160,12 @@ void draw_legend(Image& image, uint32_t y0, double scale_max, bool clamped) {
 
 uint64_t quantity_of(const TraversalStats& stats, HeatmapQuantity quantity) {
     switch (quantity) {
-        case HeatmapQuantity::nodes_visited: return stats.nodes_visited;
-        case HeatmapQuantity::triangles_tested: return stats.triangles_tested;
-        case HeatmapQuantity::work: break;
+        case HeatmapQuantity::nodes_visited:
+            return stats.nodes_visited;
+        case HeatmapQuantity::triangles_tested:
+            return stats.triangles_tested;
+        case HeatmapQuantity::work:
+            break;
     }
     return stats.nodes_visited + stats.triangles_tested;
 }
@@ -172,15 +176,15 @@ uint64_t quantity_of(const TraversalStats& stats, HeatmapQuantity quantity) {
 // and by colour-blind viewers. Ten evenly spaced samples, linearly interpolated in sRGB.
 std::array<uint8_t, 3> heatmap_colour(double t) {
     static constexpr std::array<std::array<double, 3>, 10> kRamp{{{68, 1, 84},
-                                                                   {72, 40, 120},
-                                                                   {62, 74, 137},
-                                                                   {49, 104, 142},
-                                                                   {38, 130, 142},
-                                                                   {31, 158, 137},
-                                                                   {53, 183, 121},
-                                                                   {110, 206, 88},
-                                                                   {181, 222, 43},
-                                                                   {253, 231, 37}}};
+                                                                  {72, 40, 120},
+                                                                  {62, 74, 137},
+                                                                  {49, 104, 142},
+                                                                  {38, 130, 142},
+                                                                  {31, 158, 137},
+                                                                  {53, 183, 121},
+                                                                  {110, 206, 88},
+                                                                  {181, 222, 43},
+                                                                  {253, 231, 37}}};
     if (!(t > 0.0)) t = 0.0;  // also NaN
     t = std::min(t, 1.0) * double(kRamp.size() - 1);
     size_t i = std::min(size_t(t), kRamp.size() - 2);
@@ -190,8 +194,7 @@ std::array<uint8_t, 3> heatmap_colour(double t) {
     return colour;
 }
 
-Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
-                    uint32_t height) {
+Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height) {
     check_size(width, height, "render_shaded");
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
     Image image(width, height);
@@ -230,8 +233,8 @@ void validate(const HeatmapOptions& options) {
         throw Error("render_heatmap: scale_max must be finite and >= 0, got " + std::to_string(options.scale_max));
 }
 
-Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width,
-                     uint32_t height, HeatmapInfo* info, const HeatmapOptions& options) {
+Image render_heatmap(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height,
+                     HeatmapInfo* info, const HeatmapOptions& options) {
     check_size(width, height, "render_heatmap");
     validate(options);
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
@@ -287,8 +290,8 @@ void write_png(const std::string& path, const Image& image) {
         throw Error("cannot write PNG '" + path + "': the image is empty or its pixel buffer has the wrong size");
     }
     errno = 0;
-    int ok = stbi_write_png(path.c_str(), int(image.width), int(image.height), 3, image.rgb.data(),
-                            int(image.width) * 3);
+    int ok =
+        stbi_write_png(path.c_str(), int(image.width), int(image.height), 3, image.rgb.data(), int(image.width) * 3);
     if (!ok) {
         std::string reason = errno ? std::strerror(errno) : "write failed";
         throw Error("cannot write PNG '" + path + "': " + reason);

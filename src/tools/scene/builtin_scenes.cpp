@@ -105,8 +105,8 @@ public:
         };
         const float ri = radius - 0.5f * thickness, ro = radius + 0.5f * thickness, h = 0.5f * depth;
         for (int s = 0; s < segments; ++s) {
-            quad(point(s, ri, -h), point(s + 1, ri, -h), point(s + 1, ri, h), point(s, ri, h));  // intrados
-            quad(point(s, ro, -h), point(s, ro, h), point(s + 1, ro, h), point(s + 1, ro, -h));  // extrados
+            quad(point(s, ri, -h), point(s + 1, ri, -h), point(s + 1, ri, h), point(s, ri, h));    // intrados
+            quad(point(s, ro, -h), point(s, ro, h), point(s + 1, ro, h), point(s + 1, ro, -h));    // extrados
             quad(point(s, ri, -h), point(s, ro, -h), point(s + 1, ro, -h), point(s + 1, ri, -h));  // front
             quad(point(s, ri, h), point(s + 1, ri, h), point(s + 1, ro, h), point(s, ro, h));      // back
         }
@@ -219,9 +219,11 @@ std::vector<Triangle> make_organic() {
         const float y = 2.0f * static_cast<float>(j) / n - 1.0f;
         const float z = 2.0f * static_cast<float>(k) / n - 1.0f;
         const float x2 = x * x, y2 = y * y, z2 = z * z;
-        const Vec3 dir{x * std::sqrt(1 - y2 / 2 - z2 / 2 + y2 * z2 / 3), y * std::sqrt(1 - z2 / 2 - x2 / 2 + z2 * x2 / 3),
+        const Vec3 dir{x * std::sqrt(1 - y2 / 2 - z2 / 2 + y2 * z2 / 3),
+                       y * std::sqrt(1 - z2 / 2 - x2 / 2 + z2 * x2 / 3),
                        z * std::sqrt(1 - x2 / 2 - y2 / 2 + x2 * y2 / 3)};
-        const float radius = 1.0f + 0.35f * fractal_noise(dir * 2.5f) + 0.05f * std::sin(9.0f * dir.x) * std::sin(7.0f * dir.y);
+        const float radius =
+            1.0f + 0.35f * fractal_noise(dir * 2.5f) + 0.05f * std::sin(9.0f * dir.x) * std::sin(7.0f * dir.y);
         return dir * (4.0f * radius);
     };
     MeshBuilder mesh;
@@ -237,8 +239,10 @@ std::vector<Triangle> make_organic() {
             for (int u = 0; u < n; ++u)
                 for (int v = 0; v < n; ++v) {
                     Vec3 a = lattice(u, v), b = lattice(u + 1, v), c = lattice(u + 1, v + 1), d = lattice(u, v + 1);
-                    if (side == n) mesh.quad(a, b, c, d);  // counter-clockwise seen from outside
-                    else mesh.quad(a, d, c, b);
+                    if (side == n)
+                        mesh.quad(a, b, c, d);  // counter-clockwise seen from outside
+                    else
+                        mesh.quad(a, d, c, b);
                 }
         }
     }

@@ -101,7 +101,8 @@ Camera default_camera(const Scene& scene) {
     const float direction_length = std::sqrt((unfused(1.0f * 1.0f) + unfused(0.6f * 0.6f)) + unfused(1.0f * 1.0f));
     const Vec3 direction = Vec3(1.0f, 0.6f, 1.0f) / direction_length;
     const float distance = 1.5f * diagonal;
-    const Vec3 offset{unfused(direction.x * distance), unfused(direction.y * distance), unfused(direction.z * distance)};
+    const Vec3 offset{unfused(direction.x * distance), unfused(direction.y * distance),
+                      unfused(direction.z * distance)};
     Camera camera;
     camera.eye = center + offset;
     camera.target = center;

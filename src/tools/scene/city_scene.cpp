@@ -18,7 +18,7 @@
 namespace spacebvh::tools::scene_detail {
 namespace {
 
-constexpr float kBlockSide = 100.0f;   // a block: 2 x 2 lots of 50 x 50
+constexpr float kBlockSide = 100.0f;  // a block: 2 x 2 lots of 50 x 50
 constexpr float kStreetWidth = 20.0f;
 constexpr float kPitch = kBlockSide + kStreetWidth;
 constexpr float kLotSide = 0.5f * kBlockSide;
@@ -30,14 +30,17 @@ enum class Kind : uint8_t { box, tower, facade };
 struct BuildingPlan {
     float x0, z0, x1, z1, height;
     Kind kind;
-    uint8_t tiers;       // tower: stacked boxes, each narrower than the one below
-    uint32_t columns;    // facade: cells per wall across
-    uint32_t rows;       // facade: cells per wall up
+    uint8_t tiers;     // tower: stacked boxes, each narrower than the one below
+    uint32_t columns;  // facade: cells per wall across
+    uint32_t rows;     // facade: cells per wall up
     uint64_t triangles() const {
         switch (kind) {
-            case Kind::box: return 10;  // four walls and a roof (no floor)
-            case Kind::tower: return 10 * uint64_t(tiers);
-            case Kind::facade: return 2 + 8 * uint64_t(columns) * rows;
+            case Kind::box:
+                return 10;  // four walls and a roof (no floor)
+            case Kind::tower:
+                return 10 * uint64_t(tiers);
+            case Kind::facade:
+                return 2 + 8 * uint64_t(columns) * rows;
         }
         return 0;
     }
@@ -54,7 +57,9 @@ public:
     // origin + s*u + t*v on an nu x nv grid. Shared corners come from the same expression, so
     // neighbouring cells meet without cracks.
     void grid(Vec3 origin, Vec3 u, Vec3 v, uint32_t nu, uint32_t nv) {
-        auto at = [&](uint32_t i, uint32_t j) { return origin + u * (float(i) / float(nu)) + v * (float(j) / float(nv)); };
+        auto at = [&](uint32_t i, uint32_t j) {
+            return origin + u * (float(i) / float(nu)) + v * (float(j) / float(nv));
+        };
         for (uint32_t j = 0; j < nv; ++j)
             for (uint32_t i = 0; i < nu; ++i) quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
     }
@@ -64,7 +69,9 @@ public:
         const Vec3 up{0.0f, y1 - y0, 0.0f};
         for (int k = 0; k < 4; ++k) grid(corners[k], corners[(k + 1) % 4] - corners[k], up, nu, nv);
     }
-    void roof(float x0, float z0, float x1, float z1, float y) { quad({x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}); }
+    void roof(float x0, float z0, float x1, float z1, float y) {
+        quad({x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0});
+    }
     Triangle* position() const { return out_; }
 
 private:
@@ -111,7 +118,8 @@ BuildingPlan plan_building(uint64_t index, uint32_t blocks) {
 void plan_facades(std::vector<BuildingPlan>& plans, double budget) {
     double total_area = 0;
     for (const BuildingPlan& plan : plans)
-        if (plan.kind == Kind::facade) total_area += double(plan.height) * double((plan.x1 - plan.x0) + (plan.z1 - plan.z0));
+        if (plan.kind == Kind::facade)
+            total_area += double(plan.height) * double((plan.x1 - plan.x0) + (plan.z1 - plan.z0));
     double carry = 0;
     for (BuildingPlan& plan : plans) {
         if (plan.kind != Kind::facade) continue;

@@ -37,8 +37,7 @@ Matrix4 multiply(const Matrix4& a, const Matrix4& b) {
 }
 
 // Images are irrelevant for ray tracing geometry: accept and ignore them.
-bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-                  void*) {
+bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
     return true;
 }
 
@@ -61,7 +60,8 @@ public:
         }
         for (int scene : scenes) {
             std::vector<char> visited(model_.nodes.size(), 0);
-            for (int root : model_.scenes[scene].nodes) visit(root, kIdentity, visited, "scene " + std::to_string(scene));
+            for (int root : model_.scenes[scene].nodes)
+                visit(root, kIdentity, visited, "scene " + std::to_string(scene));
         }
         if (scenes.empty()) fail("asset", "no scenes: nothing to place");
         if (triangles_.empty()) throw Error(path_ + ": no triangles in the glTF scene(s)");
@@ -114,11 +114,26 @@ private:
             double x = node.rotation[0], y = node.rotation[1], z = node.rotation[2], w = node.rotation[3];
             double norm = std::sqrt(x * x + y * y + z * z + w * w);
             if (!(norm > 0) || !std::isfinite(norm)) fail(where, "rotation quaternion is zero or not finite");
-            x /= norm; y /= norm; z /= norm; w /= norm;
-            rotation = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),     0,
-                        2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),     0,
-                        2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y), 0,
-                        0,                       0,                       0,                       1};
+            x /= norm;
+            y /= norm;
+            z /= norm;
+            w /= norm;
+            rotation = {1 - 2 * (y * y + z * z),
+                        2 * (x * y + z * w),
+                        2 * (x * z - y * w),
+                        0,
+                        2 * (x * y - z * w),
+                        1 - 2 * (x * x + z * z),
+                        2 * (y * z + x * w),
+                        0,
+                        2 * (x * z + y * w),
+                        2 * (y * z - x * w),
+                        1 - 2 * (x * x + y * y),
+                        0,
+                        0,
+                        0,
+                        0,
+                        1};
         } else if (!node.rotation.empty()) {
             fail(where, "rotation must have 4 numbers");
         }
@@ -245,8 +260,8 @@ private:
                     if (value >= points.size())
                         fail(index_where + " element " + std::to_string(i) + " (byte offset " +
                                  std::to_string(view.buffer_offset + i * view.stride) + ")",
-                             "vertex index " + std::to_string(value) + " out of range: " +
-                                 std::to_string(points.size()) + " positions");
+                             "vertex index " + std::to_string(value) +
+                                 " out of range: " + std::to_string(points.size()) + " positions");
                     indices[i] = value;
                 }
             } else {
@@ -263,14 +278,16 @@ private:
         const size_t n = idx.size();
         if (mode == TINYGLTF_MODE_TRIANGLES) {
             if (n % 3 != 0) fail(where, std::to_string(n) + " vertices is not a multiple of 3 for TRIANGLES");
-            for (size_t i = 0; i < n; i += 3) triangles_.push_back({points[idx[i]], points[idx[i + 1]], points[idx[i + 2]]});
+            for (size_t i = 0; i < n; i += 3)
+                triangles_.push_back({points[idx[i]], points[idx[i + 1]], points[idx[i + 2]]});
         } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
             for (size_t i = 0; i + 2 < n; ++i) {
                 const size_t odd = i % 2;
                 triangles_.push_back({points[idx[i]], points[idx[i + 1 + odd]], points[idx[i + 2 - odd]]});
             }
         } else {  // fan
-            for (size_t i = 1; i + 1 < n; ++i) triangles_.push_back({points[idx[0]], points[idx[i]], points[idx[i + 1]]});
+            for (size_t i = 1; i + 1 < n; ++i)
+                triangles_.push_back({points[idx[0]], points[idx[i]], points[idx[i + 1]]});
         }
     }
 
@@ -287,22 +304,26 @@ void check_glb_container(const std::string& path, std::string_view bytes) {
         std::memcpy(&v, bytes.data() + offset, 4);
         return v;  // GLB is little-endian; so are all our targets
     };
-    if (bytes.size() < 20) fail_at(path, "byte offset 0", "GLB file too short (" + std::to_string(bytes.size()) + " bytes)");
+    if (bytes.size() < 20)
+        fail_at(path, "byte offset 0", "GLB file too short (" + std::to_string(bytes.size()) + " bytes)");
     if (std::memcmp(bytes.data(), "glTF", 4) != 0) fail_at(path, "byte offset 0", "not a GLB file (no 'glTF' magic)");
     if (u32(4) != 2) fail_at(path, "byte offset 4", "GLB version " + std::to_string(u32(4)) + ", expected 2");
     const uint64_t total = u32(8);
     if (total > bytes.size())
-        fail_at(path, "byte offset 8", "GLB length " + std::to_string(total) + " but the file has " +
-                                           std::to_string(bytes.size()) + " bytes (truncated?)");
+        fail_at(path, "byte offset 8",
+                "GLB length " + std::to_string(total) + " but the file has " + std::to_string(bytes.size()) +
+                    " bytes (truncated?)");
     const uint64_t json_length = u32(12);
     if (u32(16) != 0x4E4F534Au) fail_at(path, "byte offset 16", "first GLB chunk is not JSON");
     if (20 + json_length > total) fail_at(path, "byte offset 12", "JSON chunk length exceeds the file (truncated?)");
     const uint64_t bin_header = 20 + ((json_length + 3) & ~uint64_t{3});
     if (bin_header < total) {
-        if (bin_header + 8 > total) fail_at(path, "byte offset " + std::to_string(bin_header), "truncated chunk header");
+        if (bin_header + 8 > total)
+            fail_at(path, "byte offset " + std::to_string(bin_header), "truncated chunk header");
         const uint64_t bin_length = u32(bin_header);
         if (bin_header + 8 + bin_length > total)
-            fail_at(path, "byte offset " + std::to_string(bin_header), "BIN chunk length exceeds the file (truncated?)");
+            fail_at(path, "byte offset " + std::to_string(bin_header),
+                    "BIN chunk length exceeds the file (truncated?)");
     }
 }
 
@@ -326,16 +347,18 @@ std::vector<Triangle> parse_gltf(std::string_view bytes, const std::string& path
     const auto length = static_cast<unsigned int>(bytes.size());
     bool ok = false;
     try {
-        ok = binary ? loader.LoadBinaryFromMemory(&model, &error, &warning,
-                                                  reinterpret_cast<const unsigned char*>(bytes.data()), length, base_dir)
-                    : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), length, base_dir);
+        ok = binary
+                 ? loader.LoadBinaryFromMemory(&model, &error, &warning,
+                                               reinterpret_cast<const unsigned char*>(bytes.data()), length, base_dir)
+                 : loader.LoadASCIIFromString(&model, &error, &warning, bytes.data(), length, base_dir);
     } catch (const std::exception& e) {  // nlohmann::json may throw on type mismatches
         error = e.what();
         ok = false;
     }
     if (!ok) {
         while (!error.empty() && (error.back() == '\n' || error.back() == ' ')) error.pop_back();
-        throw Error(path + ": invalid glTF: " + (error.empty() ? std::string("tinygltf failed without a message") : error));
+        throw Error(path +
+                    ": invalid glTF: " + (error.empty() ? std::string("tinygltf failed without a message") : error));
     }
     return GltfReader(path, model).read();
 }

@@ -82,8 +82,8 @@ std::vector<Triangle> parse_obj(std::string_view data, const std::string& path) 
                 if (!tokens.next(token)) fail_at_line(path, line, "vertex needs 3 coordinates");
                 NumberStatus status = parse_float(token, p[axis]);
                 if (status != NumberStatus::ok)
-                    fail_at_line(path, line, std::string(describe(status)) + " " + quote_token(token) +
-                                                 " in vertex coordinate");
+                    fail_at_line(path, line,
+                                 std::string(describe(status)) + " " + quote_token(token) + " in vertex coordinate");
             }
             // Optional w or vertex colour: must still be numbers, or the line is not what we think it is.
             while (tokens.next(token)) {
@@ -105,8 +105,9 @@ std::vector<Triangle> parse_obj(std::string_view data, const std::string& path) 
                 if (index < 0) {
                     // Relative index: -1 is the most recently defined vertex.
                     if (-index > count)
-                        fail_at_line(path, line, "relative vertex index " + std::to_string(index) + " but only " +
-                                                     std::to_string(count) + " vertices are defined so far");
+                        fail_at_line(path, line,
+                                     "relative vertex index " + std::to_string(index) + " but only " +
+                                         std::to_string(count) + " vertices are defined so far");
                     index = count + index + 1;
                 }
                 if (index > static_cast<int64_t>(std::numeric_limits<uint32_t>::max()))
@@ -118,8 +119,8 @@ std::vector<Triangle> parse_obj(std::string_view data, const std::string& path) 
                 polygon.push_back(static_cast<uint32_t>(index - 1));
             }
             if (polygon.size() < 3)
-                fail_at_line(path, line, "face has " + std::to_string(polygon.size()) +
-                                             " vertices, at least 3 are needed");
+                fail_at_line(path, line,
+                             "face has " + std::to_string(polygon.size()) + " vertices, at least 3 are needed");
             for (size_t i = 1; i + 1 < polygon.size(); ++i) {
                 corners.push_back(polygon[0]);
                 corners.push_back(polygon[i]);
@@ -130,9 +131,9 @@ std::vector<Triangle> parse_obj(std::string_view data, const std::string& path) 
     }
 
     if (largest_index > static_cast<int64_t>(vertices.size()))
-        fail_at_line(path, largest_index_line, "vertex index " + std::to_string(largest_index) +
-                                                   " out of range: the file has " + std::to_string(vertices.size()) +
-                                                   " vertices");
+        fail_at_line(path, largest_index_line,
+                     "vertex index " + std::to_string(largest_index) + " out of range: the file has " +
+                         std::to_string(vertices.size()) + " vertices");
     if (corners.empty()) throw Error(path + ": no triangles (no 'f' records) in " + std::to_string(line) + " lines");
     std::vector<Triangle> triangles(corners.size() / 3);
     for (size_t t = 0; t < triangles.size(); ++t)

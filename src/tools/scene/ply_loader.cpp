@@ -17,10 +17,18 @@ enum class Type { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
 
 size_t type_size(Type type) {
     switch (type) {
-        case Type::int8: case Type::uint8: return 1;
-        case Type::int16: case Type::uint16: return 2;
-        case Type::int32: case Type::uint32: case Type::float32: return 4;
-        case Type::float64: return 8;
+        case Type::int8:
+        case Type::uint8:
+            return 1;
+        case Type::int16:
+        case Type::uint16:
+            return 2;
+        case Type::int32:
+        case Type::uint32:
+        case Type::float32:
+            return 4;
+        case Type::float64:
+            return 8;
     }
     return 0;
 }
@@ -82,8 +90,7 @@ Header parse_header(const std::string& path, std::string_view data) {
     bool have_format = false;
     for (;;) {
         size_t eol = data.find('\n', pos);
-        if (eol == std::string_view::npos)
-            fail_at_line(path, line + 1, "PLY header is not terminated by 'end_header'");
+        if (eol == std::string_view::npos) fail_at_line(path, line + 1, "PLY header is not terminated by 'end_header'");
         ++line;
         std::string_view text(data.data() + pos, eol - pos);
         pos = eol + 1;
@@ -98,10 +105,14 @@ Header parse_header(const std::string& path, std::string_view data) {
         if (keyword == "end_header") break;
         if (keyword == "format") {
             if (words.size() != 3) fail_at_line(path, line, "expected 'format <kind> 1.0'");
-            if (words[1] == "ascii") header.format = Format::ascii;
-            else if (words[1] == "binary_little_endian") header.format = Format::binary_little_endian;
-            else if (words[1] == "binary_big_endian") header.format = Format::binary_big_endian;
-            else fail_at_line(path, line, "unknown PLY format " + quote_token(words[1]));
+            if (words[1] == "ascii")
+                header.format = Format::ascii;
+            else if (words[1] == "binary_little_endian")
+                header.format = Format::binary_little_endian;
+            else if (words[1] == "binary_big_endian")
+                header.format = Format::binary_big_endian;
+            else
+                fail_at_line(path, line, "unknown PLY format " + quote_token(words[1]));
             if (words[2] != "1.0") fail_at_line(path, line, "unsupported PLY version " + quote_token(words[2]));
             have_format = true;
         } else if (keyword == "element") {
@@ -121,8 +132,7 @@ Header parse_header(const std::string& path, std::string_view data) {
                 auto value_type = parse_type(words[3]);
                 if (!count_type || !value_type)
                     fail_at_line(path, line, "unknown list type " + quote_token(count_type ? words[3] : words[2]));
-                if (!is_integer_type(*count_type))
-                    fail_at_line(path, line, "list count type must be an integer type");
+                if (!is_integer_type(*count_type)) fail_at_line(path, line, "list count type must be an integer type");
                 property.is_list = true;
                 property.count_type = *count_type;
                 property.value_type = *value_type;
@@ -188,7 +198,8 @@ public:
         auto [ptr, ec] = std::from_chars(first, token.data() + token.size(), value);
         if (ec != std::errc() || ptr != token.data() + token.size() || token.empty())
             fail("malformed number " + quote_token(token));
-        if (is_integer_type(type) && value != std::floor(value)) fail("non-integer " + quote_token(token) + " for an integer property");
+        if (is_integer_type(type) && value != std::floor(value))
+            fail("non-integer " + quote_token(token) + " for an integer property");
         return value;
     }
 
@@ -204,8 +215,10 @@ private:
     void skip_space() {
         for (; pos_ < data_.size(); ++pos_) {
             const char c = data_[pos_];
-            if (c == '\n') ++line_;
-            else if (c != ' ' && c != '\t' && c != '\r') break;
+            if (c == '\n')
+                ++line_;
+            else if (c != ' ' && c != '\t' && c != '\r')
+                break;
         }
     }
 
@@ -230,14 +243,40 @@ private:
         if (file_is_little != (std::endian::native == std::endian::little))
             for (size_t i = 0; i < size / 2; ++i) std::swap(bytes[i], bytes[size - 1 - i]);
         switch (type) {
-            case Type::int8: return static_cast<int8_t>(bytes[0]);
-            case Type::uint8: return bytes[0];
-            case Type::int16: { int16_t v; std::memcpy(&v, bytes, 2); return v; }
-            case Type::uint16: { uint16_t v; std::memcpy(&v, bytes, 2); return v; }
-            case Type::int32: { int32_t v; std::memcpy(&v, bytes, 4); return v; }
-            case Type::uint32: { uint32_t v; std::memcpy(&v, bytes, 4); return v; }
-            case Type::float32: { float v; std::memcpy(&v, bytes, 4); return v; }
-            case Type::float64: { double v; std::memcpy(&v, bytes, 8); return v; }
+            case Type::int8:
+                return static_cast<int8_t>(bytes[0]);
+            case Type::uint8:
+                return bytes[0];
+            case Type::int16: {
+                int16_t v;
+                std::memcpy(&v, bytes, 2);
+                return v;
+            }
+            case Type::uint16: {
+                uint16_t v;
+                std::memcpy(&v, bytes, 2);
+                return v;
+            }
+            case Type::int32: {
+                int32_t v;
+                std::memcpy(&v, bytes, 4);
+                return v;
+            }
+            case Type::uint32: {
+                uint32_t v;
+                std::memcpy(&v, bytes, 4);
+                return v;
+            }
+            case Type::float32: {
+                float v;
+                std::memcpy(&v, bytes, 4);
+                return v;
+            }
+            case Type::float64: {
+                double v;
+                std::memcpy(&v, bytes, 8);
+                return v;
+            }
         }
         return 0;
     }
@@ -315,8 +354,7 @@ std::vector<Triangle> parse_ply(std::string_view data, const std::string& path) 
             index_list = find_property(element, {"vertex_indices", "vertex_index"});
             if (index_list < 0 || !element.properties[index_list].is_list)
                 fail_at_line(path, element.header_line, "face element has no list property 'vertex_indices'");
-            if (!have_vertices)
-                fail_at_line(path, element.header_line, "face element comes before the vertex element");
+            if (!have_vertices) fail_at_line(path, element.header_line, "face element comes before the vertex element");
             triangles.reserve(element.count);
             have_faces = true;
         }
@@ -351,11 +389,13 @@ std::vector<Triangle> parse_ply(std::string_view data, const std::string& path) 
                 for (uint64_t i = 0; i < count; ++i) {
                     const double value = reader.read(property.value_type);
                     if (!(value >= 0 && value < static_cast<double>(vertices.size()) && value == std::floor(value)))
-                        reader.fail("vertex index " + format_value(value) + " out of range: " +
-                                    std::to_string(vertices.size()) + " vertices");
+                        reader.fail("vertex index " + format_value(value) +
+                                    " out of range: " + std::to_string(vertices.size()) + " vertices");
                     const uint32_t vertex = static_cast<uint32_t>(value);
-                    if (i == 0) first = vertex;
-                    else if (i >= 2) triangles.push_back({vertices[first], vertices[previous], vertices[vertex]});
+                    if (i == 0)
+                        first = vertex;
+                    else if (i >= 2)
+                        triangles.push_back({vertices[first], vertices[previous], vertices[vertex]});
                     previous = vertex;
                 }
             }

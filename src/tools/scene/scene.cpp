@@ -112,7 +112,8 @@ Scene make_indexed_scene(std::span<const float> vertices, std::span<const int64_
     Scene scene;
     scene.name = name;
     scene.triangles.reserve(indices.size() / 3);
-    for (size_t t = 0; t < indices.size() / 3; ++t) scene.triangles.push_back({vertex(t, 0), vertex(t, 1), vertex(t, 2)});
+    for (size_t t = 0; t < indices.size() / 3; ++t)
+        scene.triangles.push_back({vertex(t, 0), vertex(t, 1), vertex(t, 2)});
     scene.degenerate_count = scene_detail::count_degenerate(scene.triangles);
     return scene;
 }

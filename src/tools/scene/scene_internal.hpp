@@ -54,10 +54,14 @@ inline NumberStatus parse_float(std::string_view text, float& out) {
 
 inline const char* describe(NumberStatus status) {
     switch (status) {
-        case NumberStatus::ok: return "ok";
-        case NumberStatus::malformed: return "malformed number";
-        case NumberStatus::out_of_range: return "number out of float range";
-        case NumberStatus::not_finite: return "NaN or infinite number";
+        case NumberStatus::ok:
+            return "ok";
+        case NumberStatus::malformed:
+            return "malformed number";
+        case NumberStatus::out_of_range:
+            return "number out of float range";
+        case NumberStatus::not_finite:
+            return "NaN or infinite number";
     }
     return "bad number";
 }

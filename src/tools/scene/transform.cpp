@@ -15,10 +15,26 @@ namespace {
 void sin_cos_degrees(double degrees, double& s, double& c) {
     double reduced = std::fmod(degrees, 360.0);
     if (reduced < 0) reduced += 360.0;
-    if (reduced == 0.0) { s = 0; c = 1; return; }
-    if (reduced == 90.0) { s = 1; c = 0; return; }
-    if (reduced == 180.0) { s = 0; c = -1; return; }
-    if (reduced == 270.0) { s = -1; c = 0; return; }
+    if (reduced == 0.0) {
+        s = 0;
+        c = 1;
+        return;
+    }
+    if (reduced == 90.0) {
+        s = 1;
+        c = 0;
+        return;
+    }
+    if (reduced == 180.0) {
+        s = 0;
+        c = -1;
+        return;
+    }
+    if (reduced == 270.0) {
+        s = -1;
+        c = 0;
+        return;
+    }
     double radians = degrees * (std::numbers::pi / 180.0);
     s = std::sin(radians);
     c = std::cos(radians);

@@ -17,14 +17,14 @@
 
 namespace spacebvh::trace {
 
-
 namespace {
 
 // A push happens at most once per level, and build options cap the depth at 1024.
 constexpr int kStackSize = 1024 + 8;
 void set_child(CompactNode& node, int slot, const AABB& box, uint32_t child, uint32_t lanes) {
     if (lanes > CompactNode::kLanes)
-        throw std::length_error("binary layout: a leaf of " + std::to_string(lanes) + " triangles exceeds its 2^30 - 1 lanes");
+        throw std::length_error("binary layout: a leaf of " + std::to_string(lanes) +
+                                " triangles exceeds its 2^30 - 1 lanes");
     for (int axis = 0; axis < 3; ++axis) {
         node.planes[axis][slot] = box.lo[axis];
         node.planes[axis][slot + 2] = box.hi[axis];
@@ -91,7 +91,7 @@ struct SlabRay {
 #else
         (void)slabs;
         org[kAxis] = _mm_set1_ps(ray.org[kAxis]);
-        inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);  // +-inf for axis-parallel rays
+        inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);           // +-inf for axis-parallel rays
         const bool negative_direction = std::signbit(ray.dir[kAxis]);  // the sign of inv_dir, -0 included
 #endif
 #ifdef __AVX__
@@ -333,7 +333,8 @@ BinaryLayout make_binary_layout(std::span<const Triangle> triangles, const Bvh& 
                                 " bytes of nodes and triangles exceed the 32-bit offsets of its nodes (128 GiB)");
     for (CompactNode& node : parts.nodes) {
         for (int slot = 0; slot < 2; ++slot)
-            node.child[slot] = uint32_t(node.lanes(slot) ? node_units + node.child[slot] * kPackUnits : node.child[slot] * kNodeUnits);
+            node.child[slot] =
+                uint32_t(node.lanes(slot) ? node_units + node.child[slot] * kPackUnits : node.child[slot] * kNodeUnits);
         order_children(node);
     }
     std::vector<CompactNode, HugePageAllocator<CompactNode>>& buffer = layout.buffer;

@@ -48,12 +48,17 @@ struct Kernels {
     }
     static void packet_closest(const void* layout, const Ray* rays, uint32_t count, Hit* hits, TraversalStats* stats) {
         const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
-        if (stats) trace_packet<S, false, true>(wide, rays, count, hits, nullptr, stats);
-        else trace_packet<S, false, false>(wide, rays, count, hits, nullptr, nullptr);
+        if (stats)
+            trace_packet<S, false, true>(wide, rays, count, hits, nullptr, stats);
+        else
+            trace_packet<S, false, false>(wide, rays, count, hits, nullptr, nullptr);
     }
-    static void packet_occluded(const void* layout, const Ray* rays, uint32_t count, uint8_t* occluded, TraversalStats* stats) {
+    static void packet_occluded(const void* layout, const Ray* rays, uint32_t count, uint8_t* occluded,
+                                TraversalStats* stats) {
         const auto& wide = *static_cast<const WideLayout<S::kLanes>*>(layout);
-        if (stats) trace_packet<S, true, true>(wide, rays, count, nullptr, occluded, stats);
-        else trace_packet<S, true, false>(wide, rays, count, nullptr, occluded, nullptr);
+        if (stats)
+            trace_packet<S, true, true>(wide, rays, count, nullptr, occluded, stats);
+        else
+            trace_packet<S, true, false>(wide, rays, count, nullptr, occluded, nullptr);
     }
 };

@@ -59,13 +59,27 @@ struct Policy {
         for (int i = 0; i < W; ++i) r.lane[i] = x;
         return r;
     }
-    static F sub(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x - y; }); }
-    static F mul(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x * y; }); }
-    static F max(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x > y ? x : y; }); }
-    static F min(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x < y ? x : y; }); }
-    static F add(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x + y; }); }
-    static F div(const F& a, const F& b) { return apply(a, b, [](float x, float y) { return x / y; }); }
-    static F abs(const F& a) { return apply(a, a, [](float x, float) { return std::fabs(x); }); }
+    static F sub(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x - y; });
+    }
+    static F mul(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x * y; });
+    }
+    static F max(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x > y ? x : y; });
+    }
+    static F min(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x < y ? x : y; });
+    }
+    static F add(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x + y; });
+    }
+    static F div(const F& a, const F& b) {
+        return apply(a, b, [](float x, float y) { return x / y; });
+    }
+    static F abs(const F& a) {
+        return apply(a, a, [](float x, float) { return std::fabs(x); });
+    }
     static F fmsub(const F& a, const F& b, const F& c) {
         F r;
         for (int i = 0; i < W; ++i) r.lane[i] = std::fma(a.lane[i], b.lane[i], -c.lane[i]);
@@ -161,7 +175,9 @@ struct Avx2Operations {
         return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
     }
     static unsigned less_mask(F a, F b) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ))); }
-    static unsigned hit_mask(F near, F limit) { return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ))); }
+    static unsigned hit_mask(F near, F limit) {
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, limit, _CMP_LE_OQ)));
+    }
     static int collect(unsigned mask, F near, float* entry, uint32_t* slot) {
         alignas(32) float lanes[8];
         _mm256_store_ps(lanes, near);
@@ -202,7 +218,8 @@ struct Policy<4> : SseOperations {
     static __m128 fmsub(__m128 a, __m128 b, __m128 c) { return _mm_fmsub_ps(a, b, c); }
     static int collect(unsigned mask, __m128 near, float* entry, uint32_t* slot) {
         _mm_storeu_ps(entry, _mm_maskz_compress_ps(__mmask8(mask), near));
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(slot), _mm_maskz_compress_epi32(__mmask8(mask), _mm_setr_epi32(0, 1, 2, 3)));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(slot),
+                         _mm_maskz_compress_epi32(__mmask8(mask), _mm_setr_epi32(0, 1, 2, 3)));
         return __builtin_popcount(mask);
     }
 };
@@ -230,11 +247,15 @@ struct Policy<8> : Avx2Operations {
 bool cpu_has(NodeTest test) {
     switch (test) {
         case NodeTest::scalar:
-        case NodeTest::sse: return true;
-        case NodeTest::avx2: return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+        case NodeTest::sse:
+            return true;
+        case NodeTest::avx2:
+            return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
         case NodeTest::avx512:
-            return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("fma");
-        case NodeTest::best: return true;
+            return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                   __builtin_cpu_supports("fma");
+        case NodeTest::best:
+            return true;
     }
     return false;
 }
@@ -242,10 +263,14 @@ bool cpu_has(NodeTest test) {
 bool width_has(int width, NodeTest test) {
     switch (test) {
         case NodeTest::scalar:
-        case NodeTest::avx512: return true;
-        case NodeTest::sse: return width == 4;
-        case NodeTest::avx2: return width == 8;
-        case NodeTest::best: return true;
+        case NodeTest::avx512:
+            return true;
+        case NodeTest::sse:
+            return width == 4;
+        case NodeTest::avx2:
+            return width == 8;
+        case NodeTest::best:
+            return true;
     }
     return false;
 }
@@ -260,10 +285,10 @@ constexpr SingleRayKernels table_of(LeafTest leaf_test) {
 template <class K>
 constexpr SingleRayKernels quantized_table_of(LeafTest leaf_test) {
     if (leaf_test == LeafTest::moller)
-        return {&K::template quantized_closest<true>, &K::template quantized_closest_stats<true>, &K::template quantized_occluded<true>,
-                &K::template quantized_occluded_stats<true>};
-    return {&K::template quantized_closest<false>, &K::template quantized_closest_stats<false>, &K::template quantized_occluded<false>,
-            &K::template quantized_occluded_stats<false>};
+        return {&K::template quantized_closest<true>, &K::template quantized_closest_stats<true>,
+                &K::template quantized_occluded<true>, &K::template quantized_occluded_stats<true>};
+    return {&K::template quantized_closest<false>, &K::template quantized_closest_stats<false>,
+            &K::template quantized_occluded<false>, &K::template quantized_occluded_stats<false>};
 }
 template <class K>
 constexpr PacketKernels packet_table_of() {
@@ -274,31 +299,42 @@ constexpr PacketKernels packet_table_of() {
 SingleRayKernels single_ray_kernels(int width, NodeTest test, LeafTest leaf_test, NodeFormat format) {
     if (format == NodeFormat::quantized) {
         switch (test) {
-            case NodeTest::avx2: return quantized_table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
-            case NodeTest::avx512: return quantized_table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
-            default: return quantized_table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
+            case NodeTest::avx2:
+                return quantized_table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
+            case NodeTest::avx512:
+                return quantized_table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
+            default:
+                return quantized_table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
         }
     }
     if (width == 4) {
         switch (test) {
-            case NodeTest::sse: return table_of<sse_kernels::Kernels<sse_kernels::Policy>>(leaf_test);
-            case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<4>>>(leaf_test);
-            default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<4>>>(leaf_test);
+            case NodeTest::sse:
+                return table_of<sse_kernels::Kernels<sse_kernels::Policy>>(leaf_test);
+            case NodeTest::avx512:
+                return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<4>>>(leaf_test);
+            default:
+                return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<4>>>(leaf_test);
         }
     }
     switch (test) {
-        case NodeTest::avx2: return table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
-        case NodeTest::avx512: return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
-        default: return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
+        case NodeTest::avx2:
+            return table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>(leaf_test);
+        case NodeTest::avx512:
+            return table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>(leaf_test);
+        default:
+            return table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>(leaf_test);
     }
 }
 
-
 PacketKernels packet_kernels(NodeTest test) {
     switch (test) {
-        case NodeTest::avx2: return packet_table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>();
-        case NodeTest::avx512: return packet_table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>();
-        default: return packet_table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>();
+        case NodeTest::avx2:
+            return packet_table_of<avx2_kernels::Kernels<avx2_kernels::Policy>>();
+        case NodeTest::avx512:
+            return packet_table_of<avx512_kernels::Kernels<avx512_kernels::Policy<8>>>();
+        default:
+            return packet_table_of<scalar_kernels::Kernels<scalar_kernels::Policy<8>>>();
     }
 }
 

@@ -145,9 +145,12 @@ inline bool all_dominant_on(const PacketRaysSoA& rays, uint32_t padded_count, in
         const F x = S::abs(S::load(rays.dir[0] + base)), y = S::abs(S::load(rays.dir[1] + base)),
                 z = S::abs(S::load(rays.dir[2] + base));
         bool same;
-        if (kz == 0) same = (S::less_mask(x, y) | S::less_mask(x, z)) == 0;           // x >= y and x >= z
-        else if (kz == 1) same = S::less_mask(x, y) == kAllLanes && S::less_mask(y, z) == 0;  // y > x, y >= z
-        else same = (S::less_mask(x, z) & S::less_mask(y, z)) == kAllLanes;          // z > x and z > y
+        if (kz == 0)
+            same = (S::less_mask(x, y) | S::less_mask(x, z)) == 0;  // x >= y and x >= z
+        else if (kz == 1)
+            same = S::less_mask(x, y) == kAllLanes && S::less_mask(y, z) == 0;  // y > x, y >= z
+        else
+            same = (S::less_mask(x, z) & S::less_mask(y, z)) == kAllLanes;  // z > x and z > y
         if (!same) return false;
     }
     return true;
@@ -185,11 +188,12 @@ template <class S>
 // shear's axes kx, ky, kz: pack_edges with the roles of rays and triangles swapped, lane by lane the
 // same float operations, so each lane decides exactly as the single-ray test would.
 template <class S>
-[[gnu::always_inline]] inline void edges_over_rays(const TrianglePack& pack, int lane, const PacketRaysSoA& rays, uint32_t base,
-                                                   int kx, int ky, int kz, float* u_out, float* v_out, float* w_out,
-                                                   unsigned& outside, unsigned& inside) {
+[[gnu::always_inline]] inline void edges_over_rays(const TrianglePack& pack, int lane, const PacketRaysSoA& rays,
+                                                   uint32_t base, int kx, int ky, int kz, float* u_out, float* v_out,
+                                                   float* w_out, unsigned& outside, unsigned& inside) {
     using F = typename S::F;
-    const F org_x = S::load(rays.org[kx] + base), org_y = S::load(rays.org[ky] + base), org_z = S::load(rays.org[kz] + base);
+    const F org_x = S::load(rays.org[kx] + base), org_y = S::load(rays.org[ky] + base),
+            org_z = S::load(rays.org[kz] + base);
     const F shear_x = S::load(rays.shear_x + base), shear_y = S::load(rays.shear_y + base);
     F sheared_x[3], sheared_y[3], magnitude = S::set1(0.0f), size = S::set1(0.0f);
     for (int k = 0; k < 3; ++k) {
@@ -203,7 +207,8 @@ template <class S>
         magnitude = S::max(magnitude, vertex_magnitude);
         size = S::max(size, S::max(S::abs(sheared_x[k]), S::abs(sheared_y[k])));
     }
-    const F ax = sheared_x[0], ay = sheared_y[0], bx = sheared_x[1], by = sheared_y[1], cx = sheared_x[2], cy = sheared_y[2];
+    const F ax = sheared_x[0], ay = sheared_y[0], bx = sheared_x[1], by = sheared_y[1], cx = sheared_x[2],
+            cy = sheared_y[2];
     const F u = S::sub(S::mul(cx, by), S::mul(cy, bx));
     const F v = S::sub(S::mul(ax, cy), S::mul(ay, cx));
     const F w = S::sub(S::mul(bx, ay), S::mul(by, ax));
@@ -224,8 +229,9 @@ template <class S>
 // distance keeps the running bound; the exit distance widened by kFarScale; the rays of a packet share
 // their entry and exit planes), so it never disagrees with the ray's own node test.
 template <class S>
-[[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot, const PacketRaysSoA& rays,
-                                                           uint32_t base, const PacketFrustum& frustum, float* entry = nullptr) {
+[[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot,
+                                                           const PacketRaysSoA& rays, uint32_t base,
+                                                           const PacketFrustum& frustum, float* entry = nullptr) {
     using F = typename S::F;
     F near = S::load(rays.tmin + base), far = S::load(rays.tmax + base);
     for (int axis = 0; axis < 3; ++axis) {
@@ -254,8 +260,8 @@ typedef double Double4 __attribute__((vector_size(32)));
 // distances and the same decisions, four lanes per vector. Returns the lanes of `crossing` whose
 // distance lies in the ray's [tmin, tmax]; their distances in `t` (other lanes may be left unset).
 template <class S>
-[[gnu::always_inline]] inline unsigned crossings_in_range(const Vec3 vertex[3], const PacketRaysSoA& rays, uint32_t base,
-                                                          unsigned crossing, double* t) {
+[[gnu::always_inline]] inline unsigned crossings_in_range(const Vec3 vertex[3], const PacketRaysSoA& rays,
+                                                          uint32_t base, unsigned crossing, double* t) {
     const Vec3 &v0 = vertex[0], &v1 = vertex[1], &v2 = vertex[2];
     const double e1x = double(v1.x) - v0.x, e1y = double(v1.y) - v0.y, e1z = double(v1.z) - v0.z;
     const double e2x = double(v2.x) - v0.x, e2y = double(v2.y) - v0.y, e2z = double(v2.z) - v0.z;
@@ -266,8 +272,9 @@ template <class S>
         const uint32_t i = base + uint32_t(j);
         const Double4 px = double(v0.x) - widened(rays.org[0] + i), py = double(v0.y) - widened(rays.org[1] + i),
                       pz = double(v0.z) - widened(rays.org[2] + i);
-        const Double4 distance = (nx * px + ny * py + nz * pz) /
-                                 (nx * widened(rays.dir[0] + i) + ny * widened(rays.dir[1] + i) + nz * widened(rays.dir[2] + i));
+        const Double4 distance =
+            (nx * px + ny * py + nz * pz) /
+            (nx * widened(rays.dir[0] + i) + ny * widened(rays.dir[1] + i) + nz * widened(rays.dir[2] + i));
         const auto inside = (distance >= widened(rays.tmin + i)) & (distance <= widened(rays.tmax + i));
         __builtin_memcpy(t + j, &distance, sizeof(distance));
         for (int k = 0; k < 4; ++k) in_range |= unsigned(inside[k] != 0) << (j + k);
@@ -328,8 +335,8 @@ struct PacketRay {
 // Traces a packet whose rays share the sign of each direction component (nonzero) and returns true;
 // returns false, having traced nothing, for any other packet.
 template <class S, bool kAnyHit, bool kStats>
-bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits, uint8_t* occluded,
-                           TraversalStats* stats) {
+bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits,
+                           uint8_t* occluded, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     constexpr uint32_t L = uint32_t(S::kLanes);
     const uint32_t padded_count = (count + L - 1) / L * L;
@@ -436,7 +443,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                     if (!candidates) continue;
                     if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
                     alignas(64) float entry[L];
-                    const unsigned entering = candidates & rays_entering_child<S>(node, child_slot, soa, c * L, frustum, entry);
+                    const unsigned entering =
+                        candidates & rays_entering_child<S>(node, child_slot, soa, c * L, frustum, entry);
                     if (!entering) continue;
                     const uint32_t lane = uint32_t(__builtin_ctz(entering));
                     first_ray[child_slot] = c * L + lane;
@@ -453,15 +461,18 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                 for (unsigned bits = assigned; bits; bits &= bits - 1) {
                     const uint32_t slot = uint32_t(__builtin_ctz(bits));
                     int j = n++;
-                    while (j > 0 && visits_after<kAnyHit>(node, first_entry[slot], slot, first_entry[order[j - 1]], order[j - 1])) {
+                    while (j > 0 && visits_after<kAnyHit>(node, first_entry[slot], slot, first_entry[order[j - 1]],
+                                                          order[j - 1])) {
                         order[j] = order[j - 1];
                         --j;
                     }
                     order[j] = slot;
                 }
                 for (int k = 0; k < n - 1; ++k)
-                    stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]], current.child, order[k]};
-                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]], current.child, order[n - 1]};
+                    stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]], current.child,
+                                    order[k]};
+                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]], current.child,
+                           order[n - 1]};
                 if (current.count == 0) prefetch_node(layout.nodes[current.child]);
                 continue;
             }
@@ -494,7 +505,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                         const int lane = int(lane_index % 4);
                         if constexpr (kStats)
                             if (lane == 0)
-                                stats->triangles_tested += uint64_t(__builtin_popcount(entering)) * std::min(4u, current.count - lane_index);
+                                stats->triangles_tested +=
+                                    uint64_t(__builtin_popcount(entering)) * std::min(4u, current.count - lane_index);
                         alignas(64) float u[L], v[L], w[L];
                         unsigned outside, inside;
                         edges_over_rays<S>(pack, lane, soa, base, kx, ky, kz, u, v, w, outside, inside);
@@ -503,7 +515,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                         Vec3 vertex[3];
                         pack_triangle(pack, lane, vertex);
                         alignas(64) double t[L];
-                        unsigned crossed = candidates & inside ? crossings_in_range<S>(vertex, soa, base, candidates & inside, t) : 0;
+                        unsigned crossed =
+                            candidates & inside ? crossings_in_range<S>(vertex, soa, base, candidates & inside, t) : 0;
                         if constexpr (!kAnyHit)
                             for (unsigned bits = crossed; bits; bits &= bits - 1) {
                                 const uint32_t j = uint32_t(__builtin_ctz(bits)), i = base + j;
@@ -515,7 +528,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                         for (unsigned near_edge = candidates & ~inside; near_edge; near_edge &= near_edge - 1) {
                             const uint32_t j = uint32_t(__builtin_ctz(near_edge)), i = base + j;
                             TriangleHit candidate;
-                            if (!decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate))
+                            if (!decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j],
+                                                candidate))
                                 continue;
                             crossed |= 1u << j;
                             if constexpr (!kAnyHit) {
@@ -527,9 +541,9 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                             if (!crossed) continue;
                             entering &= ~crossed;
                             if (active.settle(c, crossed)) {
-                        active.write_occlusion(occluded, count);
-                        return true;
-                    }
+                                active.write_occlusion(occluded, count);
+                                return true;
+                            }
                         }
                     }
                     continue;
@@ -544,8 +558,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
                     const PackRay pack_ray(shear);
                     Hit unused;
                     bool found = false;
-                    test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear, pack_ray, soa.tmax[i],
-                                                  kAnyHit ? unused : hits[i], found, stats);
+                    test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear,
+                                                  pack_ray, soa.tmax[i], kAnyHit ? unused : hits[i], found, stats);
                     if (kAnyHit && found && active.settle(c, 1u << j)) {
                         active.write_occlusion(occluded, count);
                         return true;
@@ -583,8 +597,10 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
         for (uint32_t i = 0; i < count; ++i) {
             Hit hit;
             const bool found = traverse<S, kAnyHit, kStats>(layout, rays[i], hit, stats);
-            if constexpr (kAnyHit) occluded[i] = found;
-            else hits[i] = hit;
+            if constexpr (kAnyHit)
+                occluded[i] = found;
+            else
+                hits[i] = hit;
         }
         return;
     }
@@ -600,18 +616,23 @@ void trace_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t
                 group[size++] = rays[i];
             }
         if (size == 0) continue;
-        if (size < count && trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
+        if (size < count &&
+            trace_coherent_packet<S, kAnyHit, kStats>(layout, group, size, group_hits, group_occluded, stats)) {
             for (uint32_t k = 0; k < size; ++k) {
-                if constexpr (kAnyHit) occluded[index[k]] = group_occluded[k];
-                else hits[index[k]] = group_hits[k];
+                if constexpr (kAnyHit)
+                    occluded[index[k]] = group_occluded[k];
+                else
+                    hits[index[k]] = group_hits[k];
             }
             continue;
         }
         for (uint32_t k = 0; k < size; ++k) {
             Hit hit;
             const bool found = traverse<S, kAnyHit, kStats>(layout, group[k], hit, stats);
-            if constexpr (kAnyHit) occluded[index[k]] = found;
-            else hits[index[k]] = hit;
+            if constexpr (kAnyHit)
+                occluded[index[k]] = found;
+            else
+                hits[index[k]] = hit;
         }
     }
 }

@@ -6,8 +6,8 @@
 // A policy S provides: kLanes (the node width W), the vector type F with load/store/set1/sub/mul/min/max
 // and fmsub (a * b - c, rounded once), hit_mask(near, limit) (bit i: near[i] <= limit[i]),
 // collect(mask, near, entry, slot) (writes the entry distances and slots of the hit children in slot
-// order, returns their number), and kScalarTriangles (test leaf triangles one at a time with the scalar test, for the reference kernel).
-// No lambdas here: they would not inherit the target of the pragma region.
+// order, returns their number), and kScalarTriangles (test leaf triangles one at a time with the scalar test, for the
+// reference kernel). No lambdas here: they would not inherit the target of the pragma region.
 
 // Per-ray constants of the single-ray box test: the fused slab constants of each axis
 // (traversal_common.hpp, FusedSlabs: why the test stays conservative) broadcast, and which plane of a
@@ -37,13 +37,15 @@ struct RayBoxes {
 // (0 * inf: an empty slot on an axis the ray does not move along) leaves the running bound unchanged,
 // by the operand order of min and max.
 template <class S>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S>& ray, float tmin, float tmax,
-                                                      typename S::F& near) {
+[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S>& ray,
+                                                      float tmin, float tmax, typename S::F& near) {
     near = S::set1(tmin);
     typename S::F far = S::set1(tmax);
     for (int axis = 0; axis < 3; ++axis) {
-        const typename S::F t_entry = S::fmsub(S::load(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
-        const typename S::F t_exit = S::fmsub(S::load(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        const typename S::F t_entry =
+            S::fmsub(S::load(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
+        const typename S::F t_exit =
+            S::fmsub(S::load(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
         near = S::max(t_entry, near);
         far = S::min(t_exit, far);
     }
@@ -55,8 +57,8 @@ template <class S>
 // float box and the fused slab test on it stays conservative. Slots without a child are masked off.
 // Needs the policy's load_u8 (eight codes to floats) and fmadd (8-wide policies only).
 template <class S>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S>& ray, float tmin, float tmax,
-                                                      typename S::F& near) {
+[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S>& ray, float tmin,
+                                                      float tmax, typename S::F& near) {
     near = S::set1(tmin);
     typename S::F far = S::set1(tmax);
     for (int axis = 0; axis < 3; ++axis) {
@@ -78,8 +80,8 @@ template <class S>
 // the two agree lane for lane. Returns the number of children entered within [tmin, tmax], their
 // entry distances and slots in slot order.
 template <class S, class Boxes>
-[[gnu::always_inline]] inline int enter_children(const WideNode<S::kLanes>& node, const Boxes& ray, float tmin, float tmax,
-                                                 float* entry, uint32_t* slot) {
+[[gnu::always_inline]] inline int enter_children(const WideNode<S::kLanes>& node, const Boxes& ray, float tmin,
+                                                 float tmax, float* entry, uint32_t* slot) {
     typename S::F near = S::set1(tmin), far = S::set1(tmax);
     for (int axis = 0; axis < 3; ++axis) {
         const typename S::F org = ray.org(axis), inv_dir = ray.inv_dir(axis);
@@ -97,8 +99,8 @@ template <class S, bool kAnyHit, bool kStats>
 [[gnu::always_inline]] inline bool test_leaf(const TrianglePack* packs, uint32_t first, uint32_t count, const Ray& ray,
                                              const WatertightRay& shear, const PackRay& pack_ray, float& tmax, Hit& hit,
                                              bool& found, TraversalStats* stats) {
-    return test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(packs, first, count, ray, shear, pack_ray, tmax, hit, found,
-                                                                 stats);
+    return test_leaf_packs<S::kScalarTriangles, kAnyHit, kStats>(packs, first, count, ray, shear, pack_ray, tmax, hit,
+                                                                 found, stats);
 }
 
 // The order children are visited in (closest hits here; any hit only in the packet kernel: the
@@ -111,7 +113,7 @@ template <class S, bool kAnyHit, bool kStats>
 // diffuse rays.
 template <bool kAnyHit, class Node>
 [[gnu::always_inline]] inline bool visits_after(const Node& node, float entry_a, uint32_t slot_a, float entry_b,
-                                                 uint32_t slot_b) {
+                                                uint32_t slot_b) {
     if constexpr (kAnyHit) {
         const bool leaf_a = node.count[slot_a] != 0, leaf_b = node.count[slot_b] != 0;
         if (leaf_a != leaf_b) return leaf_b;
@@ -131,8 +133,8 @@ template <class Node>
 // the first triangle pack of a leaf (three lines); traversal is bound by the latency of these fetches.
 // With the moller leaf test (`planes` not null), the leaf's planes line too.
 template <class Node>
-[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const TrianglePack* packs, const PackPlanes* planes,
-                                                  uint32_t child, uint32_t count) {
+[[gnu::always_inline]] inline void prefetch_child(const Node* nodes, const TrianglePack* packs,
+                                                  const PackPlanes* planes, uint32_t child, uint32_t count) {
     if (count == 0) {
         prefetch_node(nodes[child]);
     } else {
@@ -260,8 +262,8 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
             }
         } else {
             if constexpr (kMoller) {
-                if (test_leaf_moller<kAnyHit, kStats>(packs, planes, current.child, current.count, ray, moller, tmax, hit, found,
-                                                      stats))
+                if (test_leaf_moller<kAnyHit, kStats>(packs, planes, current.child, current.count, ray, moller, tmax,
+                                                      hit, found, stats))
                     return true;
             } else {
                 if (!sheared) {
@@ -269,8 +271,8 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
                     pack_ray = PackRay(shear);
                     sheared = true;
                 }
-                if (test_leaf<S, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax, hit, found,
-                                                  stats))
+                if (test_leaf<S, kAnyHit, kStats>(packs, current.child, current.count, ray, shear, pack_ray, tmax, hit,
+                                                  found, stats))
                     return true;
             }
         }

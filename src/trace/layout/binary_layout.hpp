@@ -39,7 +39,7 @@ static_assert(sizeof(CompactNode) == 64);
 // coin toss the branch predictor often loses.
 constexpr size_t kUnit = 32;
 static_assert(sizeof(CompactNode) % kUnit == 0 && sizeof(TrianglePack) % kUnit == 0);
-constexpr size_t kNodeUnits = sizeof(CompactNode) / kUnit;          // 2
+constexpr size_t kNodeUnits = sizeof(CompactNode) / kUnit;   // 2
 constexpr size_t kPackUnits = sizeof(TrianglePack) / kUnit;  // 5
 
 struct BinaryLayout {

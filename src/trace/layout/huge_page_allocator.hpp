@@ -37,7 +37,9 @@ struct HugePageAllocator {
     void deallocate(T* pointer, size_t) noexcept { std::free(pointer); }
 
     template <typename U>
-    bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+    bool operator==(const HugePageAllocator<U>&) const noexcept {
+        return true;
+    }
 };
 
 }  // namespace spacebvh::trace

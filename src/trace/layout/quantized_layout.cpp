@@ -57,7 +57,8 @@ QuantizedNode8 quantize_node(const WideNode<8>& node) {
             continue;
         }
         if (node.count[slot] > 0xffffu)
-            throw Error("quantized nodes: a leaf of " + std::to_string(node.count[slot]) + " triangle lanes (at most 65535)");
+            throw Error("quantized nodes: a leaf of " + std::to_string(node.count[slot]) +
+                        " triangle lanes (at most 65535)");
         out.used_mask |= uint8_t(1u << slot);
         out.child[slot] = node.child[slot];
         out.count[slot] = uint16_t(node.count[slot]);

@@ -41,7 +41,7 @@ namespace spacebvh::trace {
 struct alignas(64) QuantizedNode8 {
     uint8_t q[6][8];
     float origin[3];
-    float scale[3];     // a power of two per axis
+    float scale[3];  // a power of two per axis
     uint32_t child[8];
     uint16_t count[8];
     uint8_t used_mask;  // bit i: slot i holds a child

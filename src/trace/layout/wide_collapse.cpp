@@ -50,7 +50,8 @@ std::vector<uint32_t> subtree_triangles(std::span<const Triangle> triangles, con
     return live;
 }
 
-CollapsePlan::CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost)
+CollapsePlan::CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy,
+                           const WideCost& cost)
     : bvh_(bvh), width_(width), strategy_(strategy), cost_(cost) {
     if (bvh.empty()) return;
     const size_t count = bvh.nodes.size();

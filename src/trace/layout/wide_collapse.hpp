@@ -37,7 +37,8 @@ struct WideCost {
 
 class CollapsePlan {
 public:
-    CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy, const WideCost& cost = {});
+    CollapsePlan(std::span<const Triangle> triangles, const Bvh& bvh, int width, WideCollapse strategy,
+                 const WideCost& cost = {});
 
     // The children of the wide node made for binary inner node `node`, left to right.
     std::vector<CollapseSlot> slots(uint32_t node) const;

@@ -51,7 +51,11 @@ template <int W>
 class Collapser {
 public:
     Collapser(std::span<const Triangle> triangles, const Bvh& bvh, WideLayout<W>& layout, WideCollapse collapse)
-        : triangles_(triangles), bvh_(bvh), layout_(layout), plan_(triangles, bvh, W, collapse), packer_(triangles, bvh, layout.packs) {}
+        : triangles_(triangles),
+          bvh_(bvh),
+          layout_(layout),
+          plan_(triangles, bvh, W, collapse),
+          packer_(triangles, bvh, layout.packs) {}
 
     struct MadeNode {
         uint32_t index;  // of its WideNode
@@ -69,8 +73,9 @@ public:
         for (int slot = 0; slot < int(children.size()); ++slot) {
             if (!children[slot].leaf) continue;
             const BvhNode& child = bvh_.nodes[children[slot].node];
-            const auto [first, count] =
-                child.is_leaf() ? packer_.add(child) : packer_.add(subtree_triangles(triangles_, bvh_, children[slot].node));
+            const auto [first, count] = child.is_leaf()
+                                            ? packer_.add(child)
+                                            : packer_.add(subtree_triangles(triangles_, bvh_, children[slot].node));
             set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
             lanes[slot] = count;
         }

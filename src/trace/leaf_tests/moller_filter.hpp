@@ -65,9 +65,9 @@ struct MollerRay {
 // What the filter decided about a pack's lanes (bit = lane).
 struct MollerDecision {
     alignas(16) float w[4], a[4], b[4];  // edge functions: weights of v0, v1, v2 times det (any sign)
-    int rejected;   // certainly no hit in [tmin, tmax]: outside an edge, or t certainly outside
-    int inside;     // certainly inside all three edges (the others not rejected: the exact test decides)
-    int within;     // inside, and t certainly in [tmin, tmax]
+    int rejected;                        // certainly no hit in [tmin, tmax]: outside an edge, or t certainly outside
+    int inside;  // certainly inside all three edges (the others not rejected: the exact test decides)
+    int within;  // inside, and t certainly in [tmin, tmax]
 };
 
 [[gnu::always_inline]] inline __m128 moller_abs(__m128 x) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), x); }
@@ -86,8 +86,10 @@ struct MollerDecision {
     const __m128 rx = _mm_sub_ps(_mm_mul_ps(c[1], ray.dir[2]), _mm_mul_ps(c[2], ray.dir[1]));
     const __m128 ry = _mm_sub_ps(_mm_mul_ps(c[2], ray.dir[0]), _mm_mul_ps(c[0], ray.dir[2]));
     const __m128 rz = _mm_sub_ps(_mm_mul_ps(c[0], ray.dir[1]), _mm_mul_ps(c[1], ray.dir[0]));
-    const __m128 nx = _mm_load_ps(planes.normal[0]), ny = _mm_load_ps(planes.normal[1]), nz = _mm_load_ps(planes.normal[2]);
-    const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, ray.dir[0]), _mm_mul_ps(ny, ray.dir[1])), _mm_mul_ps(nz, ray.dir[2]));
+    const __m128 nx = _mm_load_ps(planes.normal[0]), ny = _mm_load_ps(planes.normal[1]),
+                 nz = _mm_load_ps(planes.normal[2]);
+    const __m128 det =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, ray.dir[0]), _mm_mul_ps(ny, ray.dir[1])), _mm_mul_ps(nz, ray.dir[2]));
     const __m128 a = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, e2[0]), _mm_mul_ps(ry, e2[1])), _mm_mul_ps(rz, e2[2]));
     const __m128 minus_b = _mm_add_ps(_mm_add_ps(_mm_mul_ps(rx, e1[0]), _mm_mul_ps(ry, e1[1])), _mm_mul_ps(rz, e1[2]));
     const __m128 w = _mm_add_ps(_mm_sub_ps(det, a), minus_b);
@@ -107,7 +109,8 @@ struct MollerDecision {
     const __m128 a_pos = _mm_cmpgt_ps(a, edge_bound), a_neg = _mm_cmplt_ps(a, negative_edge_bound);
     const __m128 b_pos = _mm_cmplt_ps(minus_b, negative_edge_bound), b_neg = _mm_cmpgt_ps(minus_b, edge_bound);
     const __m128 w_pos = _mm_cmpgt_ps(w, edge_bound), w_neg = _mm_cmplt_ps(w, negative_edge_bound);
-    const __m128 any_pos = _mm_or_ps(_mm_or_ps(a_pos, b_pos), w_pos), any_neg = _mm_or_ps(_mm_or_ps(a_neg, b_neg), w_neg);
+    const __m128 any_pos = _mm_or_ps(_mm_or_ps(a_pos, b_pos), w_pos),
+                 any_neg = _mm_or_ps(_mm_or_ps(a_neg, b_neg), w_neg);
     const __m128 inside =
         _mm_or_ps(_mm_and_ps(_mm_and_ps(a_pos, b_pos), w_pos), _mm_and_ps(_mm_and_ps(a_neg, b_neg), w_neg));
     const __m128 outside = _mm_and_ps(any_pos, any_neg);
@@ -138,8 +141,8 @@ struct MollerDecision {
 // hit still takes its distance from the plane equation in double (finish_crossing), as the arbiter.
 template <bool kAnyHit, bool kStats>
 [[gnu::always_inline]] inline bool test_leaf_moller(const TrianglePack* packs, const PackPlanes* planes, uint32_t first,
-                                                    uint32_t count, const Ray& ray, const MollerRay& moller, float& tmax,
-                                                    Hit& hit, bool& found, TraversalStats* stats) {
+                                                    uint32_t count, const Ray& ray, const MollerRay& moller,
+                                                    float& tmax, Hit& hit, bool& found, TraversalStats* stats) {
     for (uint32_t p = 0; p * 4 < count; ++p) {
         const TrianglePack& pack = packs[first + p];
         const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
@@ -157,8 +160,8 @@ template <bool kAnyHit, bool kStats>
         while (candidates) {
             const int lane = __builtin_ctz(candidates);
             candidates &= candidates - 1;
-            if (settle_lane<kAnyHit, kStats>(pack, lane, (decision.inside >> lane) & 1, decision.w[lane], decision.a[lane],
-                                             decision.b[lane], ray, tmax, hit, found, stats))
+            if (settle_lane<kAnyHit, kStats>(pack, lane, (decision.inside >> lane) & 1, decision.w[lane],
+                                             decision.a[lane], decision.b[lane], ray, tmax, hit, found, stats))
                 return true;
         }
     }

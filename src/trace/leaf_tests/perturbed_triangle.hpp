@@ -69,7 +69,9 @@ inline void add_scaled_determinant(Expansion& e, double s, float tau, Vec3 a, Ve
 }
 
 // s * a.(b x c), added exactly (tau = 1 multiplies exactly).
-inline void add_determinant(Expansion& e, double s, Vec3 a, Vec3 b, Vec3 c) { add_scaled_determinant(e, s, 1.0f, a, b, c); }
+inline void add_determinant(Expansion& e, double s, Vec3 a, Vec3 b, Vec3 c) {
+    add_scaled_determinant(e, s, 1.0f, a, b, c);
+}
 
 // Edge function of the directed edge p -> q: dir . ((p - o) x (q - o)) = det(d, p, q) + det(d, q, o)
 // + det(d, o, p), exactly.
@@ -155,14 +157,17 @@ inline bool crossing_in_range(const Ray& ray, const Vec3& v0, const Vec3& v1, co
     const DVec e1 = dsub(v1, v0), e2 = dsub(v2, v0), p = dsub(v0, ray.org);
     const double dx = ray.dir.x, dy = ray.dir.y, dz = ray.dir.z;
     const double nx = e1.y * e2.z - e1.z * e2.y, ny = e1.z * e2.x - e1.x * e2.z, nz = e1.x * e2.y - e1.y * e2.x;
-    const double mx = std::fabs(e1.y * e2.z) + std::fabs(e1.z * e2.y), my = std::fabs(e1.z * e2.x) + std::fabs(e1.x * e2.z),
+    const double mx = std::fabs(e1.y * e2.z) + std::fabs(e1.z * e2.y),
+                 my = std::fabs(e1.z * e2.x) + std::fabs(e1.x * e2.z),
                  mz = std::fabs(e1.x * e2.y) + std::fabs(e1.y * e2.x);
     const double numerator = nx * p.x + ny * p.y + nz * p.z;
     const double denominator = nx * dx + ny * dy + nz * dz;
     // Error bounds: a few roundings per level, each relative to the magnitudes involved.
     constexpr double kRelative = 32.0 * 0x1p-53;
-    const double numerator_error = kRelative * (mx * std::fabs(p.x) + my * std::fabs(p.y) + mz * std::fabs(p.z)) + 0x1p-1000;
-    const double denominator_error = kRelative * (mx * std::fabs(dx) + my * std::fabs(dy) + mz * std::fabs(dz)) + 0x1p-1000;
+    const double numerator_error =
+        kRelative * (mx * std::fabs(p.x) + my * std::fabs(p.y) + mz * std::fabs(p.z)) + 0x1p-1000;
+    const double denominator_error =
+        kRelative * (mx * std::fabs(dx) + my * std::fabs(dy) + mz * std::fabs(dz)) + 0x1p-1000;
 
     int denominator_sign;
     if (std::fabs(denominator) > denominator_error)
@@ -176,8 +181,8 @@ inline bool crossing_in_range(const Ray& ray, const Vec3& v0, const Vec3& v1, co
         const double value = numerator - tau * denominator;
         const double error = numerator_error + std::fabs(tau) * denominator_error +
                              4.0 * 0x1p-53 * (std::fabs(numerator) + std::fabs(tau * denominator));
-        const int s = std::fabs(value) > error ? (value > 0 ? 1 : -1)
-                                                : crossing_minus_sign_exact(ray, v0, v1, v2, float(tau));
+        const int s =
+            std::fabs(value) > error ? (value > 0 ? 1 : -1) : crossing_minus_sign_exact(ray, v0, v1, v2, float(tau));
         return s * denominator_sign;
     };
     if (std::isfinite(ray.tmin) && at_or_beyond(ray.tmin) < 0) return false;

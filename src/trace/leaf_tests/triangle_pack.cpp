@@ -33,7 +33,8 @@ std::pair<uint32_t, uint32_t> LeafPacker::add(std::span<const uint32_t> triangle
         const uint32_t* open_begin = packs_.back().primitive;
         const uint32_t* open_end = open_begin + open_lanes_;
         const auto stored = [&](uint32_t primitive) { return std::find(open_begin, open_end, primitive) != open_end; };
-        const size_t fresh = size_t(std::count_if(triangles.begin(), triangles.end(), [&](uint32_t p) { return !stored(p); }));
+        const size_t fresh =
+            size_t(std::count_if(triangles.begin(), triangles.end(), [&](uint32_t p) { return !stored(p); }));
         if (open_lanes_ + fresh <= 4) {
             const uint32_t pack = uint32_t(packs_.size() - 1);
             for (uint32_t primitive : triangles)

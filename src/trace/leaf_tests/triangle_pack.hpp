@@ -34,7 +34,8 @@ using TrianglePacks = std::vector<TrianglePack, HugePageAllocator<TrianglePack>>
 
 // Appends the non-degenerate triangles of binary leaf `leaf` (degenerate ones are never hit, so no
 // layout stores them).
-inline void append_live_triangles(std::span<const Triangle> triangles, const Bvh& bvh, const BvhNode& leaf, std::vector<uint32_t>& out) {
+inline void append_live_triangles(std::span<const Triangle> triangles, const Bvh& bvh, const BvhNode& leaf,
+                                  std::vector<uint32_t>& out) {
     for (uint32_t i = leaf.first; i < leaf.first + leaf.reference_count; ++i)
         if (!triangles[bvh.primitives[i]].is_degenerate()) out.push_back(bvh.primitives[i]);
 }
@@ -51,7 +52,8 @@ inline void append_live_triangles(std::span<const Triangle> triangles, const Bvh
 // is not stored twice. Degenerate triangles are dropped: they are never hit.
 class LeafPacker {
 public:
-    LeafPacker(std::span<const Triangle> triangles, const Bvh& bvh, TrianglePacks& packs) : triangles_(triangles), bvh_(bvh), packs_(packs) {}
+    LeafPacker(std::span<const Triangle> triangles, const Bvh& bvh, TrianglePacks& packs)
+        : triangles_(triangles), bvh_(bvh), packs_(packs) {}
 
     // Returns {first pack, lane count}; {0, 0} when every triangle of the leaf is degenerate.
     std::pair<uint32_t, uint32_t> add(const BvhNode& leaf);
@@ -64,7 +66,7 @@ private:
     std::span<const Triangle> triangles_;
     const Bvh& bvh_;
     TrianglePacks& packs_;
-    uint32_t open_lanes_ = 4;  // lanes filled in packs_.back(); 4 = no room left
+    uint32_t open_lanes_ = 4;        // lanes filled in packs_.back(); 4 = no room left
     std::vector<uint32_t> scratch_;  // scratch of add()
 };
 
@@ -118,8 +120,8 @@ struct PackEdges {
     const __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
     const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
     const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-    const __m128 bound =
-        _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(32.0f * 0x1p-24f), magnitude), size), _mm_set1_ps(kUnderflowBound));
+    const __m128 bound = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(32.0f * 0x1p-24f), magnitude), size),
+                                    _mm_set1_ps(kUnderflowBound));
     const __m128 negative_bound = _mm_sub_ps(_mm_setzero_ps(), bound);
     const __m128 any_below = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, negative_bound), _mm_cmplt_ps(v, negative_bound)),
                                        _mm_cmplt_ps(w, negative_bound));
@@ -145,13 +147,16 @@ struct PackEdges {
 // inside. u, v, w: the lane's edge functions, weights of v0, v1, v2 times det (for the barycentrics).
 // Narrows `tmax` and fills `hit` on a closer hit; returns true when the ray is done (any hit).
 template <bool kAnyHit, bool kStats>
-[[gnu::always_inline]] inline bool settle_lane(const TrianglePack& pack, int lane, bool inside, float u, float v, float w,
-                                               const Ray& ray, float& tmax, Hit& hit, bool& found, TraversalStats* stats) {
+[[gnu::always_inline]] inline bool settle_lane(const TrianglePack& pack, int lane, bool inside, float u, float v,
+                                               float w, const Ray& ray, float& tmax, Hit& hit, bool& found,
+                                               TraversalStats* stats) {
     Vec3 vertex[3];
     pack_triangle(pack, lane, vertex);
     if constexpr (kStats) {
-        if (inside) ++stats->plane_distances;
-        else ++stats->exact_tests;
+        if (inside)
+            ++stats->plane_distances;
+        else
+            ++stats->exact_tests;
     }
     TriangleHit candidate;
     const bool crossed = inside ? finish_crossing(ray, vertex[0], vertex[1], vertex[2], tmax, u, v, w, candidate)
@@ -169,9 +174,9 @@ template <bool kAnyHit, bool kStats>
 // test (the reference kernels). Narrows `tmax` and fills `hit` on each closer hit; returns true on a
 // hit when kAnyHit.
 template <bool kScalarTriangles, bool kAnyHit, bool kStats>
-[[gnu::always_inline]] inline bool test_leaf_packs(const TrianglePack* packs, uint32_t first, uint32_t count, const Ray& ray,
-                                                   const WatertightRay& shear, const PackRay& pack_ray, float& tmax, Hit& hit,
-                                                   bool& found, TraversalStats* stats) {
+[[gnu::always_inline]] inline bool test_leaf_packs(const TrianglePack* packs, uint32_t first, uint32_t count,
+                                                   const Ray& ray, const WatertightRay& shear, const PackRay& pack_ray,
+                                                   float& tmax, Hit& hit, bool& found, TraversalStats* stats) {
     for (uint32_t p = 0; p * 4 < count; ++p) {
         const TrianglePack& pack = packs[first + p];
         const uint32_t lanes = count - p * 4 < 4 ? count - p * 4 : 4;
@@ -194,8 +199,8 @@ template <bool kScalarTriangles, bool kAnyHit, bool kStats>
             while (candidates) {
                 const int lane = __builtin_ctz(candidates);
                 candidates &= candidates - 1;
-                if (settle_lane<kAnyHit, kStats>(pack, lane, (edges.inside >> lane) & 1, edges.u[lane], edges.v[lane], edges.w[lane],
-                                                 ray, tmax, hit, found, stats))
+                if (settle_lane<kAnyHit, kStats>(pack, lane, (edges.inside >> lane) & 1, edges.u[lane], edges.v[lane],
+                                                 edges.w[lane], ray, tmax, hit, found, stats))
                     return true;
             }
         }

@@ -60,7 +60,7 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
 // The rare case (near an edge or vertex, or a degenerate triangle): the exact test decides. Kept out
 // of line so the hot float path stays small enough to inline into the traversal loop.
 [[gnu::noinline, gnu::cold]] inline bool decide_exactly(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2,
-                                                         float tmax, float u, float v, float w, TriangleHit& hit) {
+                                                        float tmax, float u, float v, float w, TriangleHit& hit) {
     Ray bounded = ray;
     bounded.tmax = tmax;
     const auto t = intersect_triangle_exact(bounded, Triangle{v0, v1, v2});
@@ -74,8 +74,8 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
 
 // The ray certainly crosses the triangle's interior (every edge function u, v, w clearly of one sign);
 // only the distance is left. Shared by the scalar test and the four-wide test of wide_kernel.inl.
-[[gnu::always_inline]] inline bool finish_crossing(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2, float tmax,
-                                                   float u, float v, float w, TriangleHit& hit) {
+[[gnu::always_inline]] inline bool finish_crossing(const Ray& ray, const Vec3& v0, const Vec3& v1, const Vec3& v2,
+                                                   float tmax, float u, float v, float w, TriangleHit& hit) {
     const float det = u + v + w;
     const double t = plane_hit_distance(ray, v0, v1, v2);
     if (!(t >= ray.tmin && t <= tmax)) return false;
@@ -87,8 +87,8 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
 
 // Tests the closed triangle (v0, v1, v2) for a hit with t in [tmin, tmax]. Returns true and fills
 // `hit` on a hit. Degenerate triangles never hit.
-[[gnu::always_inline]] inline bool intersect_watertight(const Ray& ray, const WatertightRay& w, const Vec3& v0, const Vec3& v1,
-                                 const Vec3& v2, float tmax, TriangleHit& hit) {
+[[gnu::always_inline]] inline bool intersect_watertight(const Ray& ray, const WatertightRay& w, const Vec3& v0,
+                                                        const Vec3& v1, const Vec3& v2, float tmax, TriangleHit& hit) {
     const Vec3 a = v0 - w.org, b = v1 - w.org, c = v2 - w.org;
     const float ax = a[w.kx] - w.shear_x * a[w.kz], ay = a[w.ky] - w.shear_y * a[w.kz];
     const float bx = b[w.kx] - w.shear_x * b[w.kz], by = b[w.ky] - w.shear_y * b[w.kz];
@@ -103,7 +103,8 @@ inline double plane_hit_distance(const Ray& ray, const Vec3& v0, const Vec3& v1,
     // Plain comparisons (not std::fmax, which is an out-of-line libm call): inputs are finite here.
     auto max = [](float x, float y) { return x > y ? x : y; };
     auto magnitude_of = [&](const Vec3& p) {
-        return max(std::fabs(p[w.kx]) + std::fabs(w.shear_x * p[w.kz]), std::fabs(p[w.ky]) + std::fabs(w.shear_y * p[w.kz]));
+        return max(std::fabs(p[w.kx]) + std::fabs(w.shear_x * p[w.kz]),
+                   std::fabs(p[w.ky]) + std::fabs(w.shear_y * p[w.kz]));
     };
     const float magnitude = max(max(magnitude_of(a), magnitude_of(b)), magnitude_of(c));
     const float size = max(max(max(std::fabs(ax), std::fabs(ay)), max(std::fabs(bx), std::fabs(by))),

@@ -70,9 +70,11 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
                                          _mm_cmplt_ps(_mm_and_ps(exit_scaled_org, magnitude), infinity));
         entry_scale = _mm_and_ps(finite, inv);
         exit_scale = _mm_and_ps(finite, exit_inv);
-        entry_offset = _mm_or_ps(_mm_and_ps(finite, _mm_add_ps(scaled_org, scaled_slack)), _mm_andnot_ps(finite, infinity));
+        entry_offset =
+            _mm_or_ps(_mm_and_ps(finite, _mm_add_ps(scaled_org, scaled_slack)), _mm_andnot_ps(finite, infinity));
         const __m128 minus_infinity = _mm_sub_ps(_mm_setzero_ps(), infinity);
-        exit_offset = _mm_or_ps(_mm_and_ps(finite, _mm_sub_ps(exit_scaled_org, exit_slack)), _mm_andnot_ps(finite, minus_infinity));
+        exit_offset = _mm_or_ps(_mm_and_ps(finite, _mm_sub_ps(exit_scaled_org, exit_slack)),
+                                _mm_andnot_ps(finite, minus_infinity));
         negative = unsigned(_mm_movemask_ps(inv)) & 7u;
         if ((_mm_movemask_ps(finite) & 7) == 0) [[unlikely]] {
             const float largest = std::numeric_limits<float>::max();
@@ -171,7 +173,8 @@ void intersect_batch(std::span<const Ray> rays, std::span<Hit> hits, TraversalSt
 }
 
 template <typename Traverse>
-void occluded_batch(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats, Traverse&& traverse) {
+void occluded_batch(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats,
+                    Traverse&& traverse) {
     for_each_ray(rays.size(), stats, [&](size_t i, TraversalStats& local) {
         Hit unused;
         occluded[i] = traverse(rays[i], unused, stats ? &local : nullptr);
