@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Embree's binary trees imported into our Bvh (src/embree/embree_builder.hpp): structure, the
+// Embree's binary trees imported into our Bvh (spacebvh/tools/embree_builder.hpp): structure, the
 // reference budget, answers of our tracer over them, and tree quality.
 #include <gtest/gtest.h>
 
@@ -30,7 +30,7 @@ const char* kScenes[] = {"interior", "interior-rotated", "soup"};
 const EmbreeQuality kQualities[] = {EmbreeQuality::medium, EmbreeQuality::high};
 
 BuildConfig embree_options() {
-    BuildConfig options;  // max leaf 8, C_T = C_I = 1, as embree-measured.md
+    BuildConfig options;  // max leaf 8, C_T = C_I = 1, the costs Embree's own trees are measured under
     options.limits.reference_budget = 1.2f;
     return options;
 }

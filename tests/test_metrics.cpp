@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Tree metrics (src/metrics/tree_metrics.cpp) on hand-built trees whose SAH and EPO are computed by
+// Tree metrics (src/tools/metrics/tree_metrics.cpp) on hand-built trees whose SAH and EPO are computed by
 // hand, plus a randomized comparison of EPO against a brute-force evaluation of its definition.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Rendering (src/trace/render.cpp): a shaded view and a heat map of a tiny hand-made scene, the
+// Rendering (src/tools/render/render.cpp): a shaded view and a heat map of a tiny hand-made scene, the
 // colour ramp, and PNG output.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// The binary tracer (include/spacebvh/tracer.hpp): watertightness on closed meshes, axis-parallel rays
+// The binary tracer (include/spacebvh/trace.hpp): watertightness on closed meshes, axis-parallel rays
 // and rays in slab planes, the ray segment [tmin, tmax], degenerate triangles, statistics, the batch
 // API, and unusual trees (empty, a single leaf, very deep), each checked against the exact arbiter of
 // docs/rays.md where a brute-force answer is affordable.

@@ -18,7 +18,7 @@
 namespace spacebvh::tools {
 
 // RTC_BUILD_QUALITY_LOW / MEDIUM / HIGH on the scene. HIGH is Embree's BVH8 (on AVX/AVX-512) with
-// spatial splits, the "high" rows of embree-measured.md.
+// spatial splits: the yardstick of `spacebvh compare --embree high`.
 enum class EmbreeQuality { low, medium, high };
 const char* to_string(EmbreeQuality quality);
 EmbreeQuality parse_embree_quality(const std::string& text);  // "low", "medium", "high"; throws Error
@@ -34,7 +34,7 @@ void check_embree(RTCDevice device, const char* what);
 // order. Degenerate triangles are handed to Embree as they are (it skips them itself).
 //
 // The constructor uploads the triangles and commits (builds) the scene; build_milliseconds() is the
-// time of rtcCommitScene alone, as in embree-measured.md ("embree build ms"). For a median of several
+// time of rtcCommitScene alone (the "embree build ms" of `compare`). For a median of several
 // builds, construct several times.
 //
 // Queries are const and thread-safe. Rays follow docs/rays.md: t in [tmin, tmax] in units

@@ -2,7 +2,7 @@
 // The generic top-down driver (Popov et al. 2009, "The Generic Algorithm"): at each node, evaluate
 // every configured search space, take the configuration of lowest cost under the cost model, and make
 // a leaf when nothing beats the leaf cost C_I*|N| (unless the node exceeds the leaf size limit) -
-// the greedy step of build/split_search.hpp - or, with a lookahead depth, choose among the search
+// the greedy step of builders/driver/split_search.hpp - or, with a lookahead depth, choose among the search
 // spaces' best candidates by recursive cost evaluation (builders/driver/lookahead.hpp). Nodes at the top of the
 // tree (DriverOptions::lookahead_top_share) may look ahead to the leaves, whatever the depth.
 #pragma once

@@ -8,7 +8,7 @@
 // place of some node X. Leaves are never touched (their boxes and triangles stay as built, so trees
 // with spatial splits, whose leaves hold clipped references, are optimised alike); only the topology
 // of the inner nodes above them changes, and the number of inner nodes stays the same. So the change
-// of the tree SAH (src/metrics/tree_metrics.cpp) is C_T / SA(root) times the change of the summed
+// of the tree SAH (src/tools/metrics/tree_metrics.cpp) is C_T / SA(root) times the change of the summed
 // areas of the inner nodes, and the gain of a move is exact (the figure in find_best_move).
 //
 // With C_o > 0 the tree's cost model also has an overlap penalty; that penalty prices split choices

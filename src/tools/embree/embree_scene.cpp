@@ -53,7 +53,7 @@ const char* error_name(RTCError code) {
     return "error";
 }
 
-constexpr size_t kChunkRays = 1024;  // as embree-measured.md: oneTBB chunks of 1024 rays
+constexpr size_t kChunkRays = 1024;  // rays per oneTBB task
 
 // Runs body(first, last) over chunks of exactly kChunkRays rays (the last one shorter), one task per
 // chunk, in the caller's arena.

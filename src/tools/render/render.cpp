@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Shaded views and traversal-cost heat maps (see spacebvh/render.hpp), and PNG output through
+// Shaded views and traversal-cost heat maps (see spacebvh/tools/render.hpp), and PNG output through
 // stb_image_write.
 #include "spacebvh/tools/render.hpp"
 
