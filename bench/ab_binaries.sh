@@ -12,8 +12,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -eq 2 ] || { echo "usage: bash bench/ab_binaries.sh A_CLI B_CLI" >&2; exit 2; }
 for cli in "$1" "$2"; do [ -x "$cli" ] || { echo "not an executable: $cli" >&2; exit 2; }; done
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 out=${BENCH_OUT:-bench/out}/ab
 rm -rf "$out"
 mkdir -p "$out"

@@ -14,8 +14,8 @@
 # Usage: [RUNS=3] bash bench/best_shared_scenes.sh > best.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 common=(--builders "cbvh+opt,spatial+opt,cbvh+opt@block=4;ct=2,spatial+opt@block=4;ct=2,spatial+opt@budget=2;block=4;ct=2" --kernel bvh8,packet8 --embree high --embree-packets high --tile 8
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 runs=${RUNS:-1}

@@ -9,8 +9,8 @@
 # prints the median of the per-run ratios to cbvh. Build first: scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 out=${BENCH_OUT:-bench/out}
 mkdir -p "$out"
 sweep=cbvh,spatial@co=0,spatial@co=0.1,spatial@co=0.3,spatial@co=1,spatial@co=3,spatial@co=10,spatial@co=inf

@@ -9,8 +9,8 @@
 # goes to bench/out/ ($BENCH_OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 cli=./build/spacebvh
 out=${BENCH_OUT:-bench/out}
 mkdir -p "$out"

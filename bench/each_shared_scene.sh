@@ -11,7 +11,8 @@
 set -euo pipefail
 prefix=$1
 shift
-scenes=../shared/scenes
+source "$(dirname "$0")/lib/scenes.sh"
+require_scenes
 cli=./build/spacebvh
 out=${BENCH_OUT:-bench/out}
 runs=${RUNS:-1}

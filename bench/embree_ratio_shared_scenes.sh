@@ -14,8 +14,8 @@
 # Usage: [RUNS=3] [STEMS=...] bash bench/embree_ratio_shared_scenes.sh > ratios.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 common=(--builders "${BUILDERS:-cbvh+opt,spatial+opt}" --kernel "${KERNELS:-bvh8,packet8}" --embree high --embree-packets high
         --tile 8 --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 runs=${RUNS:-1}

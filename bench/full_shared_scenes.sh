@@ -6,8 +6,8 @@
 # Usage: bash bench/full_shared_scenes.sh [scene stems...] > full.md   (build first)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 out=${BENCH_OUT:-bench/out}
 mkdir -p "$out"
 stems=("$@")

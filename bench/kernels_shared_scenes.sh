@@ -9,8 +9,8 @@
 # Usage: bash bench/kernels_shared_scenes.sh > kernels.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 common=(--builders spatial --kernel binary,bvh4,bvh8,packet8,packet16 --embree high,medium --embree-packets high
         --threads 2 --runs 5 --build-runs 1 --no-epo --quiet)
 echo "## Kernels on the spatial tree against Embree, shared scenes"

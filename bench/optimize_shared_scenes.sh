@@ -8,8 +8,8 @@
 # Usage: bash bench/optimize_shared_scenes.sh [scene stems...] > raw.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 common=(--builders binned,binned+opt,cbvh+opt,spatial,spatial+opt --kernel bvh8 --embree high --embree-packets none
         --threads 2 --runs 5 --build-runs 3 --no-epo --quiet)
 stems=("$@")

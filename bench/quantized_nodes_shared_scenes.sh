@@ -8,7 +8,8 @@
 # Usage: [RUNS=2] [STEMS=...] bash bench/quantized_nodes_shared_scenes.sh > quantized.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ ! -d ../shared/scenes ]; then echo "no ../shared/scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 export STEMS="${STEMS:-sibenik crytek_sponza living_room_3 crytek_sponza_rotated}"
 out=${BENCH_OUT:-bench/out}
 runs=${RUNS:-1}

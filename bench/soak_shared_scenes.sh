@@ -16,7 +16,8 @@
 # where it stopped (at 10^7 rays the whole soak takes hours). FRESH=1 starts over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ ! -d ../shared/scenes ]; then echo "no ../shared/scenes: nothing to soak" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes soak
 rays=${RAYS:-10000000}
 read -r -a builders <<< "${BUILDERS:-cbvh binned kdbvh spatial sbvh esc evh}"
 read -r -a groups <<< "${KERNEL_GROUPS:-binary,bvh4,bvh8,bvh8q,packet8,packet16,bvh4+moller,bvh8+moller,bvh8q+moller bvh4-scalar,bvh8-scalar,bvh8q-scalar,packet8-scalar,packet16-scalar}"

@@ -13,8 +13,8 @@
 # Usage: [STEMS="bunny sibenik"] [TREES="cbvh spatial"] bash bench/termination_gonogo.sh > gonogo.md
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to measure" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes measure
 cli=./build/spacebvh
 root=${BENCH_OUT:-bench/out}/termination
 samples=${SAMPLES:-16384}

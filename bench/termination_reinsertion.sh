@@ -9,8 +9,8 @@
 # Usage: [STEMS="sibenik living_room_3"] [RECIPES=...] bash bench/termination_reinsertion.sh > treins.md
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to measure" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes measure
 cli=./build/spacebvh
 root=${BENCH_OUT:-bench/out}/treins
 read -r -a stems <<< "${STEMS:-bunny sibenik coffee_maker crytek_sponza living_room_3}"

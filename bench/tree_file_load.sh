@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # Loading a saved tree against building it (docs/tree-format.md). Builds the `spatial` tree of
-# crytek_sponza (../shared/scenes) BUILDS times and saves it, loads it LOADS times (through
+# crytek_sponza (the shared scenes, bench/lib/scenes.sh) BUILDS times and saves it, loads it LOADS times (through
 # `spacebvh trace --tree`, which reports the load: read, checksum, geometry hash and tree checks),
 # and prints the median load time / median build time (goal: <= 0.1). Then checks that the loaded
 # tree's hit files (closest hits and occlusion, 1M random rays) equal the built tree's, byte for byte.
@@ -10,14 +10,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cli=${SPACEBVH_CLI:-build/spacebvh}
-scene=${1:-../shared/scenes/crytek_sponza/crytek_sponza.obj}
+source bench/lib/scenes.sh
+scene=${1:-$scenes/crytek_sponza/crytek_sponza.obj}
 builder=${2:-spatial}
 builds=${BUILDS:-3}
 loads=${LOADS:-7}
 threads=()
 [ -n "${THREADS:-}" ] && threads=(--threads "$THREADS")
 if [ ! -f "$scene" ]; then
-  echo "no scene at $scene (../shared is not present): nothing to measure"
+  echo "no scene at $scene (set SPACEBVH_SCENES): nothing to measure"
   exit 0
 fi
 tmp=$(mktemp -d)

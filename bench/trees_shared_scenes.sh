@@ -9,8 +9,8 @@
 # Usage: bash bench/trees_shared_scenes.sh > trees.md   (build first: scripts/build.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scenes=../shared/scenes
-if [ ! -d "$scenes" ]; then echo "no $scenes: nothing to benchmark" >&2; exit 0; fi
+source bench/lib/scenes.sh
+require_scenes
 echo "## Space-subdivision trees under the binary and BVH8 kernels, shared scenes"
 echo
 bash bench/each_shared_scene.sh trees --builders "spatial,sbvh,esc,evh,cbvh,embree-high" --kernel binary,bvh8 \

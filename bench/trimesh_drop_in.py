@@ -2,8 +2,8 @@
 """trimesh with embreex against trimesh patched with spacebvh: the same rays, one run.
 
 Not a test: it times intersects_first, intersects_any, intersects_location (multiple hits) and
-contains_points on the bunny and crytek_sponza from ../shared/scenes and prints rays per second and
-the ratios. Needs `pip install trimesh embreex` and spacebvh in the same environment.
+contains_points on the bunny and crytek_sponza from the shared scenes ($SPACEBVH_SCENES, default
+../shared/scenes beside the checkout) and prints rays per second and the ratios. Needs `pip install trimesh embreex` and spacebvh in the same environment.
 
     python bench/trimesh_drop_in.py [--rays 1000000] [--threads 2] [--scenes bunny crytek_sponza]
 
@@ -14,6 +14,7 @@ is the one that can be wrong (float32, re-query offsets, parity noise).
 """
 
 import argparse
+import os
 import time
 from pathlib import Path
 
@@ -24,12 +25,12 @@ import spacebvh
 import spacebvh.trimesh as drop_in
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENES = ROOT.parent / "shared" / "scenes"
+SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
 
 
 def read_obj(path):
     """Vertices and triangles of a plain OBJ (`v` records; `f` with the first index of each corner), as
-    ../shared/scenes/MANIFEST.md describes them; trimesh's loader needs Pillow for their materials."""
+    the scene collection's MANIFEST.md describes them; trimesh's loader needs Pillow for their materials."""
     vertices, faces = [], []
     with open(path) as lines:
         for line in lines:

@@ -6,13 +6,14 @@
 # deterministic, so they hold on a loaded machine where timings do not; they say whether a speed gap
 # is instructions, memory or branches. valgrind runs no AVX-512, so both sides run their AVX2 code
 # (the portable build picks its kernels at run time). Single thread.
-# Usage: [SCENE=../shared/scenes/crytek_sponza/crytek_sponza.obj] [ROTATE=x:45,y:45,z:45|-]
+# Usage: [SCENE=$SPACEBVH_SCENES/crytek_sponza/crytek_sponza.obj (bench/lib/scenes.sh)] [ROTATE=x:45,y:45,z:45|-]
 #        [BUILDER=spatial+opt] [KERNELS="bvh8 bvh8+moller"] [RAYS=20000] [SIDE=160]
 #        bash bench/work_per_ray.sh > work.md
 # SIDE: the primary image side whose hits the diffuse rays start from (about SIDE^2 diffuse rays at most).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scene=${SCENE:-../shared/scenes/crytek_sponza/crytek_sponza.obj}
+source bench/lib/scenes.sh
+scene=${SCENE:-$scenes/crytek_sponza/crytek_sponza.obj}
 rotate=${ROTATE:-x:45,y:45,z:45}
 builder=${BUILDER:-spatial+opt}
 read -r -a kernels <<< "${KERNELS:-bvh8 bvh8+moller}"
