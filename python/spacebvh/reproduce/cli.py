@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from . import jobs as jobs_module
-from .experiments import BY_ID, EXPERIMENTS, PROFILES, _count_wrong
+from .experiments import BY_ID, EXPERIMENTS, PROFILES, count_wrong
 from .scenes import QUICK_SCENES, Scene, content_hash, default_full_scenes, parse_scene
 from .store import Store, job_key
 
@@ -299,7 +299,7 @@ def main(argv=None) -> int:
             from .experiments import Analysis
 
             analysis = Analysis([], [], "no data", "no job of this experiment has a result in the store")
-        analysis.wrong, analysis.embree_wrong, analysis.verified_runs = _count_wrong([(s, r) for s, r, _ in found])
+        analysis.wrong, analysis.embree_wrong, analysis.verified_runs = count_wrong([(s, r) for s, r, _ in found])
         job_notes = list(skipped.get(experiment.id, [])) + [f"{m}: no result in the store (job missing or failed)"
                                                              for m in missing]
         entries.append((experiment, analysis, found, job_notes))
