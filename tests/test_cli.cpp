@@ -78,6 +78,39 @@ TEST_F(Cli, InfoOnABuiltinScene) {
     EXPECT_GT(json["diagonal"].get<double>(), 0.0);
 }
 
+// A scene file's camera comes from the manifest the caller names (--manifest, else SPACEBVH_SCENE_MANIFEST), never
+// from a file found beside the scene; a named manifest that cannot be read is an error.
+TEST_F(Cli, CameraFromTheNamedManifestOnly) {
+    fs::create_directories(path("scenes/thing"));
+    write("scenes/thing/thing.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write("scenes/MANIFEST.md", "| scene | camera |\n|---|---|\n| thing | `0,0,5,0,0,0,0,1,0,50` |\n");
+    const std::string listed = "camera      0,0,5,0,0,0,0,1,0,50";
+    const CliResult unnamed = run("info scenes/thing/thing.obj");
+    ASSERT_EQ(unnamed.exit_code, 0) << unnamed.output;
+    EXPECT_EQ(unnamed.output.find(listed), std::string::npos) << unnamed.output;
+    const CliResult named = run("info scenes/thing/thing.obj --manifest scenes/MANIFEST.md");
+    ASSERT_EQ(named.exit_code, 0) << named.output;
+    EXPECT_NE(named.output.find(listed), std::string::npos) << named.output;
+    setenv("SPACEBVH_SCENE_MANIFEST", path("scenes/MANIFEST.md").c_str(), 1);
+    const CliResult from_environment = run("info scenes/thing/thing.obj");
+    unsetenv("SPACEBVH_SCENE_MANIFEST");
+    ASSERT_EQ(from_environment.exit_code, 0) << from_environment.output;
+    EXPECT_NE(from_environment.output.find(listed), std::string::npos) << from_environment.output;
+    // rays takes the camera the same way: the same primary rays as with --camera.
+    ASSERT_EQ(run("rays scenes/thing/thing.obj --kind primary --width 4 --height 3 -o named.rays "
+                  "--manifest scenes/MANIFEST.md")
+                  .exit_code,
+              0);
+    ASSERT_EQ(run("rays scenes/thing/thing.obj --kind primary --width 4 --height 3 -o given.rays "
+                  "--camera 0,0,5,0,0,0,0,1,0,50")
+                  .exit_code,
+              0);
+    EXPECT_EQ(read("named.rays"), read("given.rays"));
+    const CliResult absent = run("info scenes/thing/thing.obj --manifest scenes/ABSENT.md");
+    EXPECT_EQ(absent.exit_code, 1) << absent.output;
+    EXPECT_NE(absent.output.find("ABSENT.md"), std::string::npos) << absent.output;
+}
+
 // `build --json` writes the tree's metrics, consistent with each other and with the scene.
 TEST_F(Cli, BuildWritesConsistentJson) {
     const CliResult r = run("build builtin:soup --builder cbvh --json out.json");

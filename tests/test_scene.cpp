@@ -386,16 +386,19 @@ TEST(Camera, DefaultCameraFollowsTheSpec) {
 
 TEST_F(SceneFiles, CameraFromManifestTableIsTransformed) {
     fs::create_directories(dir_ / "scenes" / "thing");
-    write("scenes/MANIFEST.md",
-          "| scene | camera |\n|---|---|\n| other | `9,9,9,0,0,0,0,1,0,30` |\n"
-          "| thing | `0,0,5,0,0,0,0,1,0,50` |\n");
+    const std::string manifest = write("scenes/MANIFEST.md",
+                                       "| scene | camera |\n|---|---|\n"
+                                       "| other | `9,9,9,0,0,0,0,1,0,30` |\n"
+                                       "| thing | `0,0,5,0,0,0,0,1,0,50` |\n");
     const std::string path = write("scenes/thing/thing.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     SceneTransform transform;
     transform.rotate_degrees = {0, 90, 0};
     transform.translate = {1, 2, 3};
     Scene scene = load_scene(path, transform);
     EXPECT_EQ(scene.name, "thing@y:90,t:(1,2,3)");
-    Camera camera = camera_for_scene(scene, path, transform);
+    // Only a manifest the caller names is read: the file beside the scene's folder is not looked up.
+    EXPECT_EQ(camera_for_scene(scene, path, transform).eye, default_camera(scene).eye);
+    Camera camera = camera_for_scene(scene, path, transform, manifest);
     EXPECT_EQ(camera.eye, Vec3(6, 2, 3));  // Ry(90) takes z to x, then translate
     EXPECT_EQ(camera.target, Vec3(1, 2, 3));
     EXPECT_EQ(camera.up, Vec3(0, 1, 0));  // rotated, not translated
@@ -403,7 +406,9 @@ TEST_F(SceneFiles, CameraFromManifestTableIsTransformed) {
     // Not in the table: the default camera.
     const std::string other = write("scenes/thing/unlisted.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     Scene unlisted = load_scene(other);
-    EXPECT_EQ(camera_for_scene(unlisted, other, {}).eye, default_camera(unlisted).eye);
+    EXPECT_EQ(camera_for_scene(unlisted, other, {}, manifest).eye, default_camera(unlisted).eye);
+    // A named manifest that cannot be read is an error, not a silent default.
+    EXPECT_THROW(camera_for_scene(scene, path, transform, manifest + ".absent"), Error);
 }
 
 // ---------------------------------------------------------------- built-in scenes
@@ -662,7 +667,7 @@ TEST(SharedScenes, Bunny) {
     const AABB box = scene.bounds();
     EXPECT_EQ(box.lo, Vec3(-0.09469f, 0.032987f, -0.061874f));
     EXPECT_EQ(box.hi, Vec3(0.061009f, 0.187321f, 0.0588f));
-    const Camera camera = camera_for_scene(scene, path, {});
+    const Camera camera = camera_for_scene(scene, path, {}, kShared + "/scenes/MANIFEST.md");
     EXPECT_EQ(camera.eye, Vec3(-0.016f, 0.11f, 0.25f));
     EXPECT_EQ(camera.fovy_degrees, 45.0f);
 }
@@ -683,7 +688,7 @@ TEST(SharedScenes, CrytekSponzaAndItsRotatedVariant) {
     EXPECT_EQ(rotated.name, "crytek_sponza@x:45,y:45,z:45");
     ASSERT_EQ(rotated.triangles.size(), scene.triangles.size());
     EXPECT_EQ(rotated.triangles[1000].v1, rotation.apply(scene.triangles[1000].v1));
-    const Camera camera = camera_for_scene(rotated, path, rotation);
+    const Camera camera = camera_for_scene(rotated, path, rotation, kShared + "/scenes/MANIFEST.md");
     EXPECT_EQ(camera.eye, rotation.apply(Vec3(-110, 20, -4)));
     EXPECT_EQ(camera.target, rotation.apply(Vec3(0, 35, -4)));
     EXPECT_EQ(camera.up, rotation.apply(Vec3(0, 1, 0)));

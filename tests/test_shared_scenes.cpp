@@ -70,7 +70,8 @@ Case load_case(const SharedScene& s) {
     c.scene = load_scene(path, transform);
     const EmbreeScene embree(c.scene, EmbreeQuality::medium);
     c.rays[0] = generate_random_rays(c.scene.bounds(), 20000, 1);
-    c.rays[1] = generate_primary_rays(camera_for_scene(c.scene, path, transform), 160, 125);
+    const std::string manifest = std::string(SPACEBVH_SHARED_DIR) + "/scenes/MANIFEST.md";
+    c.rays[1] = generate_primary_rays(camera_for_scene(c.scene, path, transform, manifest), 160, 125);
     std::vector<Hit> primary_hits(c.rays[1].size());
     embree.intersect(c.rays[1], primary_hits);
     c.rays[2] = generate_diffuse_rays(c.scene, c.rays[1], primary_hits, 1);

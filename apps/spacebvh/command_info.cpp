@@ -12,6 +12,7 @@ void add_info_command(CLI::App& app) {
     struct Options {
         std::string source;
         SceneOptions scene;
+        std::string manifest;
         CommonOptions common;
     };
     auto options = std::make_shared<Options>();
@@ -19,6 +20,7 @@ void add_info_command(CLI::App& app) {
         app.add_subcommand("info", "print a scene's triangle count, degenerate triangles, bounds and camera");
     command->add_option("scene", options->source, "scene file (.obj .ply .gltf .glb) or builtin:NAME")->required();
     options->scene.add_to(*command);
+    add_manifest_option(*command, options->manifest);
     options->common.add_to(*command);
     command->callback([options] {
         const auto start = std::chrono::steady_clock::now();
@@ -26,7 +28,7 @@ void add_info_command(CLI::App& app) {
         const Scene scene = load_scene(options->source, transform);
         const double load_ms = milliseconds_since(start);
         const AABB bounds = scene.bounds();
-        const Camera camera = camera_for_scene(scene, options->source, transform);
+        const Camera camera = camera_for_scene(scene, options->source, transform, options->manifest);
         std::printf("scene       %s\n", scene.name.c_str());
         std::printf("triangles   %zu (%zu degenerate: kept, never hit)\n", scene.triangles.size(),
                     scene.degenerate_count);

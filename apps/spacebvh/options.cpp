@@ -249,10 +249,19 @@ unsigned CommonOptions::effective_threads() const {
     return threads ? threads : unsigned(tbb::info::default_concurrency());
 }
 
+void add_manifest_option(CLI::App& command, std::string& manifest) {
+    command
+        .add_option("--manifest", manifest,
+                    "a scene collection's MANIFEST.md: the camera its table lists for the "
+                    "scene file's stem is the default camera")
+        ->envname("SPACEBVH_SCENE_MANIFEST");
+}
+
 void CameraOptions::add_to(CLI::App& command) {
     command.add_option("--camera", camera,
                        "eye, target, up, fovy: ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy "
-                       "(default: the scene's MANIFEST camera, else the spec's default)");
+                       "(default: the --manifest camera, else the spec's default)");
+    add_manifest_option(command, manifest);
     command.add_option("--width", width, "image width in pixels")->capture_default_str();
     command.add_option("--height", height, "image height in pixels")->capture_default_str();
 }
@@ -261,7 +270,7 @@ Camera CameraOptions::camera_for(const Scene& scene, const std::string& source, 
     if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
         throw Error("--width and --height must be in [1, " + std::to_string(kMaxImageSide) + "]");
     if (!camera.empty()) return Camera::parse(camera);
-    return camera_for_scene(scene, source, transform);
+    return camera_for_scene(scene, source, transform, manifest);
 }
 
 Bvh build_tree(const Scene& scene, const TreeRecipe& options) {

@@ -84,8 +84,12 @@ struct CommonOptions {
     unsigned effective_threads() const;
 };
 
+// --manifest FILE (default $SPACEBVH_SCENE_MANIFEST): the MANIFEST.md whose camera table gives a scene file's camera.
+void add_manifest_option(CLI::App& command, std::string& manifest);
+
 struct CameraOptions {
-    std::string camera;  // "ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy"
+    std::string camera;    // "ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy"
+    std::string manifest;  // see add_manifest_option; empty: no manifest
     uint32_t width = 1024, height = 1024;
 
     void add_to(CLI::App& command);

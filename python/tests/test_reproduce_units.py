@@ -20,7 +20,8 @@ if not ON_PATH:
 
 from spacebvh.reproduce.jobs import generated_scene  # noqa: E402
 from spacebvh.reproduce.results import deterministic, row_label, speed_ratio  # noqa: E402
-from spacebvh.reproduce.scenes import content_hash, parse_scene  # noqa: E402
+from spacebvh.reproduce.scenes import (  # noqa: E402
+    content_hash, default_full_scenes, parse_scene, scene_manifest, shared_scenes_dir)
 from spacebvh.reproduce.store import Store, job_key  # noqa: E402
 
 
@@ -49,6 +50,42 @@ def test_content_hash_follows_the_bytes_and_the_transform(tmp_path):
     assert plain != content_hash(parse_scene(str(obj)), "lib1")
     builtin = parse_scene("builtin:interior")
     assert content_hash(builtin, "lib1") != content_hash(builtin, "lib2")  # built-ins are the library's
+
+
+def test_scene_folder_and_manifest_are_arguments_or_environment_variables(tmp_path, monkeypatch):
+    monkeypatch.delenv("SPACEBVH_SCENES", raising=False)
+    monkeypatch.delenv("SPACEBVH_SCENE_MANIFEST", raising=False)
+    scenes = tmp_path / "scenes"
+    (scenes / "room").mkdir(parents=True)
+    (scenes / "room" / "room.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    checkout = tmp_path / "elsewhere" / "checkout"
+    assert shared_scenes_dir(checkout) is None  # nothing beside this checkout
+    assert shared_scenes_dir(checkout, scenes) == scenes
+    monkeypatch.setenv("SPACEBVH_SCENES", str(scenes))
+    assert shared_scenes_dir(checkout) == scenes
+    assert shared_scenes_dir(checkout, tmp_path / "absent") is None  # the argument wins over the variable
+
+    assert scene_manifest(None, scenes) is None  # no MANIFEST.md in the folder
+    manifest = scenes / "MANIFEST.md"
+    manifest.write_text("| scene | camera |\n|---|---|\n| room | `0,0,5,0,0,0,0,1,0,50` |\n")
+    assert scene_manifest(None, scenes) == str(manifest)
+    with pytest.raises(FileNotFoundError):
+        scene_manifest(tmp_path / "absent.md", scenes)
+    monkeypatch.setenv("SPACEBVH_SCENE_MANIFEST", str(manifest))
+    assert scene_manifest() == str(manifest)
+
+    with_camera = parse_scene(str(scenes / "room" / "room.obj"), manifest)
+    assert with_camera.camera_flags == ["--manifest", str(manifest.resolve())]
+    assert parse_scene("builtin:interior", manifest).camera_flags == []  # built-in scenes carry their camera
+    plain = parse_scene(str(scenes / "room" / "room.obj"))
+    assert plain.camera_flags == [] and content_hash(plain, "lib") != content_hash(with_camera, "lib")
+    before = content_hash(with_camera, "lib")
+    manifest.write_text("| scene | camera |\n|---|---|\n| room | `0,0,6,0,0,0,0,1,0,50` |\n")
+    assert content_hash(with_camera, "lib") != before  # another camera, other primary rays: another job
+
+    monkeypatch.delenv("SPACEBVH_SCENE_MANIFEST")
+    found, notes = default_full_scenes(None, None)
+    assert found == [] and "SPACEBVH_SCENES" in notes[0]
 
 
 def test_job_keys_are_canonical_and_the_store_round_trips(tmp_path):

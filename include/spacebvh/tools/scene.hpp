@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -71,8 +72,14 @@ Scene make_builtin_scene(const std::string& name);
 // (1.5 * |diagonal|), looking at the center, up = +y, fovy = 45.
 Camera default_camera(const Scene& scene);
 
-// The camera listed for the scene in a MANIFEST.md of the scene collection it comes from (matched by the scene file's
-// stem), transformed with the scene's load transform; falls back to default_camera otherwise.
-Camera camera_for_scene(const Scene& scene, const std::string& source, const SceneTransform& transform);
+// The camera that the "| scene | `camera` |" table of a scene collection's MANIFEST.md lists for `stem` (a scene
+// file's stem), if any. Throws Error when the file cannot be read or the listed camera is malformed.
+std::optional<Camera> manifest_camera(const std::string& manifest, const std::string& stem);
+
+// A scene's camera, transformed with its load transform: a built-in scene's own; for a file, the camera `manifest`
+// (a MANIFEST.md path chosen by the caller; empty: none) lists for its stem. default_camera otherwise. The caller
+// names the manifest: where a scene file lies says nothing about which collection, if any, describes it.
+Camera camera_for_scene(const Scene& scene, const std::string& source, const SceneTransform& transform,
+                        const std::string& manifest = "");
 
 }  // namespace spacebvh::tools

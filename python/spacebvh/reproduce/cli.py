@@ -19,7 +19,7 @@ from pathlib import Path
 
 from . import jobs as jobs_module
 from .experiments import BY_ID, EXPERIMENTS, PROFILES, count_wrong
-from .scenes import QUICK_SCENES, Scene, content_hash, default_full_scenes, parse_scene
+from .scenes import QUICK_SCENES, Scene, content_hash, default_full_scenes, parse_scene, scene_manifest, shared_scenes_dir
 from .store import Store, job_key
 
 # Part of every job's key: bump when a job's meaning changes (what it runs or how it reads the CLI).
@@ -36,7 +36,14 @@ def parse_args(argv=None):
                         help="a reduced run on the built-in scenes (a few minutes on 2 cores)")
     parser.add_argument("--scenes", nargs="+", metavar="SCENE",
                         help="scene files or builtin:NAME, each optionally with @rotate=x:45,y:45,z:45;scale=S;"
-                             "translate=X Y Z (default: ../shared/scenes and crytek_sponza rotated 45/45/45)")
+                             "translate=X Y Z (default: the shared scenes of --scenes-dir and crytek_sponza rotated "
+                             "45/45/45)")
+    parser.add_argument("--scenes-dir", type=Path, metavar="DIR",
+                        help="the shared scene folder of the default scenes (default: $SPACEBVH_SCENES, else "
+                             "../shared/scenes beside the checkout)")
+    parser.add_argument("--manifest", type=Path, metavar="FILE",
+                        help="the scene collection's MANIFEST.md, whose camera table gives a scene file's camera "
+                             "(default: $SPACEBVH_SCENE_MANIFEST, else MANIFEST.md in the default scenes' folder)")
     parser.add_argument("--experiments", default=",".join(e.id for e in EXPERIMENTS),
                         help="comma-separated experiments (default: all): " + ", ".join(e.id for e in EXPERIMENTS))
     parser.add_argument("--out", default="reproduce-report", type=Path, help="report directory (default: %(default)s)")
@@ -137,11 +144,13 @@ def plan(args, cli: str, lib: str, store: Store):
     profile = "quick" if args.quick else "full"
     notes = []
     if args.scenes:
-        scenes = [parse_scene(s) for s in args.scenes]
+        manifest = scene_manifest(args.manifest)
+        scenes = [parse_scene(s, manifest) for s in args.scenes]
     elif args.quick:
         scenes = [parse_scene(s) for s in QUICK_SCENES]
     else:
-        scenes, notes = default_full_scenes(REPO)
+        root = shared_scenes_dir(REPO, args.scenes_dir)
+        scenes, notes = default_full_scenes(root, scene_manifest(args.manifest, root))
     hashes = {s: content_hash(s, lib) for s in scenes}
     triangles = {s: triangle_count(cli, s, store, hashes[s]) for s in scenes}
     selected_ids = args.experiments.split(",")
@@ -310,7 +319,8 @@ def main(argv=None) -> int:
                    "cli": cli, "machine": machine(), "job_hosts": hosts, "versions": versions(),
                    "scheduler": args.scheduler or "in-process LocalCluster, 1 worker, 1 thread",
                    "threads_per_job": args.threads or "all cores of the worker", "profile_settings": PROFILES[profile],
-                   "scenes": [{"label": s.label, "source": s.source, "flags": s.flags, "sha256": hashes[s],
+                   "scenes": [{"label": s.label, "source": s.source, "flags": s.flags, "manifest": s.manifest or None,
+                               "sha256": hashes[s],
                                "triangles": triangles[s]} for s in scenes],
                    "jobs_total": len(planned), "jobs_run": len(done), "jobs_cached": len(cached),
                    "jobs_failed": failed, "notes": notes,

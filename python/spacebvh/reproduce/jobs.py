@@ -58,8 +58,9 @@ def _run(cli: str, args: list[str], workdir: Path, record: dict) -> dict:
         return json.load(f)
 
 
-def _scene_args(scene: dict, workdir: Path) -> list[str]:
-    return [_materialize(scene, workdir), *scene.get("flags", [])]
+def _scene_args(scene: dict, workdir: Path, camera: bool = False) -> list[str]:
+    """The scene operand and its transform flags; with `camera`, also what finds its camera (--manifest)."""
+    return [_materialize(scene, workdir), *scene.get("flags", []), *(scene.get("camera_flags", []) if camera else [])]
 
 
 def _thread_args(spec: dict) -> list[str]:
@@ -80,7 +81,7 @@ def _compare_args(params: dict) -> list[str]:
 
 def _job_compare(spec, cli, workdir, record):
     params = spec["params"]
-    return [_run(cli, ["compare", *_scene_args(spec["scene"], workdir), *_compare_args(params), *_thread_args(spec)], workdir, record)]
+    return [_run(cli, ["compare", *_scene_args(spec["scene"], workdir, camera=True), *_compare_args(params), *_thread_args(spec)], workdir, record)]
 
 
 def _job_optimum(spec, cli, workdir, record):
@@ -97,7 +98,7 @@ def _job_heatmap(spec, cli, workdir, record):
     outputs, scale = [], None
     for builder in p["builders"]:
         png = workdir / f"heat_{builder}.png"
-        args = ["render", *_scene_args(spec["scene"], workdir), "--builder", builder, "--heatmap", "--kernel", p["kernel"],
+        args = ["render", *_scene_args(spec["scene"], workdir, camera=True), "--builder", builder, "--heatmap", "--kernel", p["kernel"],
                 "--quantity", p["quantity"], "--width", str(p["width"]), "--height", str(p["height"]),
                 "-o", png.name, "--quiet", *_thread_args(spec)]
         if scale is not None:

@@ -5,13 +5,14 @@ and their content hashes (the part of a job's key that says which triangles it s
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 TRANSFORM_KEYS = ("rotate", "scale", "translate")
-# The shared scenes a full run uses (../shared/scenes next to the repository), and Sponza rotated
-# 45/45/45: the classic stress case of ../shared/scenes/MANIFEST.md.
+# The shared scenes a full run uses (the folder of --scenes-dir, $SPACEBVH_SCENES or ../shared/scenes beside
+# the checkout), and Sponza rotated 45/45/45: the classic stress case of the collection's MANIFEST.md.
 SHARED_SCENES = ("bunny", "sibenik", "coffee_maker", "crytek_sponza", "living_room_3")
 ROTATION = "x:45,y:45,z:45"
 # The quick run: two built-in scenes (the rotated one is the "rotated Sponza" case) and a small
@@ -23,6 +24,7 @@ QUICK_SCENES = ("builtin:interior", "builtin:interior-rotated", "generated:terra
 class Scene:
     source: str                      # a path (absolute), builtin:NAME or generated:...
     transforms: tuple = field(default=())  # ((key, value), ...) in the order given
+    manifest: str = ""               # the MANIFEST.md whose camera table gives a file's camera ("": none)
 
     @property
     def flags(self) -> list[str]:
@@ -62,12 +64,18 @@ class Scene:
     def is_rotated(self) -> bool:
         return any(key == "rotate" for key, _ in self.transforms) or self.source.endswith("-rotated")
 
+    @property
+    def camera_flags(self) -> list[str]:
+        """What the CLI's camera-taking commands (compare, render) need to find this scene's camera."""
+        return ["--manifest", self.manifest] if self.manifest and self.is_file else []
+
     def to_json(self) -> dict:
-        return {"source": self.source, "flags": self.flags, "label": self.label}
+        return {"source": self.source, "flags": self.flags, "camera_flags": self.camera_flags, "label": self.label}
 
 
-def parse_scene(text: str) -> Scene:
-    """`PATH[@key=value[;key=value...]]`; keys: rotate, scale, translate (as the CLI's --rotate etc.)."""
+def parse_scene(text: str, manifest: str | Path | None = None) -> Scene:
+    """`PATH[@key=value[;key=value...]]`; keys: rotate, scale, translate (as the CLI's --rotate etc.).
+    `manifest`: the scene collection's MANIFEST.md, whose camera a listed file's primary rays start from."""
     source, _, options = text.partition("@")
     if not source:
         raise ValueError(f"scene '{text}': no file or builtin:NAME before '@'")
@@ -83,7 +91,7 @@ def parse_scene(text: str) -> Scene:
         if not path.is_file():
             raise FileNotFoundError(f"scene file not found: {source}")
         source = str(path.resolve())
-    return Scene(source, tuple(transforms))
+    return Scene(source, tuple(transforms), str(Path(manifest).resolve()) if manifest else "")
 
 
 def content_hash(scene: Scene, library_version: str) -> str:
@@ -105,29 +113,47 @@ def content_hash(scene: Scene, library_version: str) -> str:
             digest.update(f"generator {GENERATOR_VERSION}".encode())
     for key, value in scene.transforms:
         digest.update(f"\0{key}={value}".encode())
+    if scene.camera_flags:  # the camera decides the primary and diffuse rays
+        with open(scene.manifest, "rb") as f:
+            digest.update(b"\0manifest\0" + f.read())
     return digest.hexdigest()
 
 
-def shared_scenes_dir(repo: Path) -> Path | None:
-    """../shared/scenes beside the repository (worktrees live directly under one folder with shared/)."""
-    for candidate in (repo.parent / "shared" / "scenes", repo / "shared" / "scenes"):
-        if candidate.is_dir():
-            return candidate
+def shared_scenes_dir(repo: Path, given: str | Path | None = None) -> Path | None:
+    """The shared scene folder: `given` (--scenes-dir), else $SPACEBVH_SCENES, else ../shared/scenes beside the
+    checkout `repo` (worktrees live directly under one folder with shared/) or shared/scenes inside it. None
+    when the chosen folder is absent."""
+    chosen = given or os.environ.get("SPACEBVH_SCENES")
+    candidates = [Path(chosen)] if chosen else [repo.parent / "shared" / "scenes", repo / "shared" / "scenes"]
+    return next((c for c in candidates if c.is_dir()), None)
+
+
+def scene_manifest(given: str | Path | None = None, scenes_dir: Path | None = None) -> str | None:
+    """The MANIFEST.md for scene cameras: `given` (--manifest), else $SPACEBVH_SCENE_MANIFEST, else the one in
+    `scenes_dir` when present. Raises FileNotFoundError for a named file that is absent."""
+    chosen = given or os.environ.get("SPACEBVH_SCENE_MANIFEST")
+    if chosen:
+        if not Path(chosen).is_file():
+            raise FileNotFoundError(f"scene manifest not found: {chosen}")
+        return str(chosen)
+    if scenes_dir is not None and (scenes_dir / "MANIFEST.md").is_file():
+        return str(scenes_dir / "MANIFEST.md")
     return None
 
 
-def default_full_scenes(repo: Path) -> tuple[list[Scene], list[str]]:
-    """The shared scenes that are present and crytek_sponza rotated; notes for the missing ones."""
-    root = shared_scenes_dir(repo)
+def default_full_scenes(root: Path | None, manifest: str | None) -> tuple[list[Scene], list[str]]:
+    """The shared scenes in `root` that are present and crytek_sponza rotated, with `manifest`'s cameras;
+    notes for the missing ones."""
     if root is None:
-        return [], ["../shared/scenes is absent: no shared scene was run (use --scenes or --quick)"]
+        return [], ["no shared scene folder (--scenes-dir, SPACEBVH_SCENES or ../shared/scenes beside the "
+                    "checkout): no shared scene was run (use --scenes or --quick)"]
     scenes, notes = [], []
     for name in SHARED_SCENES:
         path = root / name / f"{name}.obj"
         if path.is_file():
-            scenes.append(parse_scene(str(path)))
+            scenes.append(parse_scene(str(path), manifest))
             if name == "crytek_sponza":
-                scenes.append(parse_scene(f"{path}@rotate={ROTATION}"))
+                scenes.append(parse_scene(f"{path}@rotate={ROTATION}", manifest))
         else:
             notes.append(f"{path} is absent: skipped")
     return scenes, notes

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: MIT
-// Cameras: parsing, the default camera of docs/rays.md and the MANIFEST camera table.
+// Cameras: parsing, the default camera of docs/rays.md and the camera table of a scene collection's MANIFEST.md.
 #include <filesystem>
 #include <fstream>
 
@@ -9,37 +9,6 @@ namespace spacebvh::tools {
 namespace {
 
 constexpr std::string_view kBuiltinPrefix = "builtin:";
-
-// The camera for `stem` in the "| scene | `camera` |" table of MANIFEST.md, if listed.
-std::optional<Camera> manifest_camera(const std::filesystem::path& manifest, const std::string& stem) {
-    std::ifstream in(manifest);
-    if (!in) return std::nullopt;
-    std::string line;
-    size_t line_number = 0;
-    while (std::getline(in, line)) {
-        ++line_number;
-        // Rows look like: | bunny | `-0.016,0.11,0.25,-0.016,0.11,0,0,1,0,45` |
-        if (line.empty() || line[0] != '|') continue;
-        size_t name_end = line.find('|', 1);
-        if (name_end == std::string::npos) continue;
-        std::string name = line.substr(1, name_end - 1);
-        while (!name.empty() && name.front() == ' ') name.erase(name.begin());
-        while (!name.empty() && name.back() == ' ') name.pop_back();
-        if (name != stem) continue;
-        size_t open = line.find('`', name_end);
-        size_t close = open == std::string::npos ? open : line.find('`', open + 1);
-        size_t cell_end = line.find('|', name_end + 1);
-        // Only the two-column camera table has the camera in the cell right after the name.
-        if (open == std::string::npos || close == std::string::npos || open > cell_end) continue;
-        std::string text = line.substr(open + 1, close - open - 1);
-        try {
-            return Camera::parse(text);
-        } catch (const Error& e) {
-            throw Error(manifest.string() + ":" + std::to_string(line_number) + ": " + e.what());
-        }
-    }
-    return std::nullopt;
-}
 
 Camera transformed(const Camera& camera, const SceneTransform& transform) {
     if (transform.is_identity()) return camera;
@@ -111,15 +80,47 @@ Camera default_camera(const Scene& scene) {
     return camera;
 }
 
-Camera camera_for_scene(const Scene& scene, const std::string& source, const SceneTransform& transform) {
+std::optional<Camera> manifest_camera(const std::string& manifest, const std::string& stem) {
+    std::ifstream in(manifest);
+    if (!in) throw Error("cannot read the scene manifest '" + manifest + "'");
+    std::string line;
+    size_t line_number = 0;
+    while (std::getline(in, line)) {
+        ++line_number;
+        // Rows look like: | bunny | `-0.016,0.11,0.25,-0.016,0.11,0,0,1,0,45` |
+        if (line.empty() || line[0] != '|') continue;
+        size_t name_end = line.find('|', 1);
+        if (name_end == std::string::npos) continue;
+        std::string name = line.substr(1, name_end - 1);
+        while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+        while (!name.empty() && name.back() == ' ') name.pop_back();
+        if (name != stem) continue;
+        size_t open = line.find('`', name_end);
+        size_t close = open == std::string::npos ? open : line.find('`', open + 1);
+        size_t cell_end = line.find('|', name_end + 1);
+        // Only the two-column camera table has the camera in the cell right after the name.
+        if (open == std::string::npos || close == std::string::npos || open > cell_end) continue;
+        std::string text = line.substr(open + 1, close - open - 1);
+        try {
+            return Camera::parse(text);
+        } catch (const Error& e) {
+            throw Error(manifest + ":" + std::to_string(line_number) + ": " + e.what());
+        }
+    }
+    return std::nullopt;
+}
+
+Camera camera_for_scene(const Scene& scene, const std::string& source, const SceneTransform& transform,
+                        const std::string& manifest) {
     if (source.rfind(kBuiltinPrefix, 0) == 0) {
         if (auto camera = scene_detail::builtin_camera(source.substr(kBuiltinPrefix.size())))
             return transformed(*camera, transform);
         return default_camera(scene);
     }
-    std::filesystem::path path(source);
-    std::filesystem::path manifest = path.parent_path() / ".." / "MANIFEST.md";
-    if (auto camera = manifest_camera(manifest, path.stem().string())) return transformed(*camera, transform);
+    if (!manifest.empty()) {
+        if (auto camera = manifest_camera(manifest, std::filesystem::path(source).stem().string()))
+            return transformed(*camera, transform);
+    }
     return default_camera(scene);
 }
 
