@@ -25,14 +25,24 @@ CLI_TIMEOUT_S = 3600
 
 
 def find_cli(hint: str | None = None) -> str:
-    """The `spacebvh` executable: $SPACEBVH_CLI, else `hint` (the client's) when it exists here, else PATH,
-    else <repo>/build/spacebvh next to this source tree."""
+    """The `spacebvh` executable: $SPACEBVH_CLI, else `hint` (the client's) when it exists here, else the
+    command installed with the package (spacebvh.cli.executable: beside the interpreter, whether or not
+    that folder is on PATH, then PATH), else <repo>/build/spacebvh next to this source tree. A worker
+    given this module alone has no package: there PATH stands in for the package's lookup."""
     env = os.environ.get("SPACEBVH_CLI")
     if env:
         return env
     if hint and Path(hint).is_file():
         return hint
-    found = shutil.which("spacebvh")
+    try:
+        from spacebvh.cli import executable
+    except ImportError:
+        found = shutil.which("spacebvh")
+    else:
+        try:
+            found = executable()
+        except FileNotFoundError:
+            found = None
     if found:
         return found
     here = Path(__file__).resolve()
