@@ -6,6 +6,7 @@ instruction of BINARY to the innermost function of ours (a path under SOURCE_ROO
 inlined intrinsics to the compiler's headers, which says nothing about which part of the kernel runs.
 
 Usage: python3 bench/callgrind_by_function.py PROFILE BINARY [SOURCE_ROOT (default: this checkout's src/)]"""
+
 import collections
 import pathlib
 import re
@@ -46,8 +47,12 @@ def self_costs(profile: str, binary_name: str) -> collections.Counter:
 
 def inline_chains(binary: str, addresses) -> dict:
     """address -> [(function, file:line), ...], innermost first."""
-    lines = subprocess.run(["addr2line", "-e", binary, "-i", "-f", "-C", "-a", *map(hex, addresses)],
-                           capture_output=True, text=True, check=True).stdout.splitlines()
+    lines = subprocess.run(
+        ["addr2line", "-e", binary, "-i", "-f", "-C", "-a", *map(hex, addresses)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.splitlines()
     chains, current, i = {}, None, 0
     while i < len(lines):
         if lines[i].startswith("0x"):

@@ -12,6 +12,7 @@ Usage: python3 bench/python_soak.py [--minutes 5] [--threads 8] [--scene builtin
 (with the spacebvh package installed; exits 1 on any wrong answer, error, or growth of resident
 memory beyond --rss-growth).
 """
+
 import argparse
 import random
 import sys
@@ -31,7 +32,7 @@ def resident_mib() -> float:
     return float("nan")
 
 
-def main() -> int:
+def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=5.0)
     parser.add_argument("--threads", type=int, default=8, help="Python threads calling at once")
@@ -40,7 +41,22 @@ def main() -> int:
     parser.add_argument("--batch", type=int, default=20_000, help="largest batch of one call")
     parser.add_argument("--calls", default="", help="comma-separated subset of the calls (default: all)")
     parser.add_argument("--rss-growth", type=float, default=0.05, help="allowed growth over the second half of the run")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def mismatches(got, want) -> int:
+    """Answers of `got` that differ from `want` (arrays, or tuples of arrays compared element by element;
+    NaN equals NaN)."""
+    if not isinstance(want, tuple):
+        return int(np.count_nonzero(got != want))
+    bad = np.zeros(len(want[0]), dtype=bool)
+    for g, w in zip(got, want):
+        bad |= ~((g == w) | (np.isnan(g) & np.isnan(w)) if g.dtype.kind == "f" else (g == w))
+    return int(np.count_nonzero(bad))
+
+
+def main() -> int:
+    args = parse_args()
 
     scene = spacebvh.load_scene(args.scene)
     bvh = spacebvh.build(scene, "spatial")
@@ -63,7 +79,9 @@ def main() -> int:
     corners = scene.triangles()[:2000].reshape(-1, 3)
     small_scene = spacebvh.mesh(corners, np.arange(len(corners), dtype=np.int64).reshape(-1, 3))
     small_builders = ["binned", "cbvh", "spatial"]
-    small_trees = {b: (t.sah, t.node_count) for b in small_builders for t in [spacebvh.build(small_scene, b, threads=1)]}
+    small_trees = {
+        b: (t.sah, t.node_count) for b in small_builders for t in [spacebvh.build(small_scene, b, threads=1)]
+    }
 
     def answer(name, part, threads):
         o, d = origins[part], directions[part]
@@ -111,14 +129,7 @@ def main() -> int:
                     counts = np.bincount(index_ray, minlength=part.stop - part.start)
                     wrong[index] += int(np.count_nonzero(counts != reference["count"][part]))
                 else:
-                    got, want = answer(name, part, threads), expected(name, part)
-                    if isinstance(want, tuple):
-                        bad = np.zeros(len(want[0]), dtype=bool)
-                        for g, w in zip(got, want):
-                            bad |= ~((g == w) | (np.isnan(g) & np.isnan(w)) if g.dtype.kind == "f" else (g == w))
-                    else:
-                        bad = got != want
-                    wrong[index] += int(np.count_nonzero(bad))
+                    wrong[index] += mismatches(answer(name, part, threads), expected(name, part))
                 calls[index] += 1
         except Exception as error:  # reported, and the soak fails
             errors.append(f"worker {index}: {type(error).__name__}: {error}")
@@ -141,8 +152,10 @@ def main() -> int:
     growth = (last[1] - warm[1]) / warm[1] if warm[1] else 0.0
     print(f"scene {args.scene}: {scene.triangle_count} triangles, {args.threads} threads, {args.minutes} min")
     print(f"calls {sum(calls)}, wrong answers {sum(wrong)}, errors {len(errors)}")
-    print(f"resident MiB: at {warm[0]:.0f} s {warm[1]:.1f}, end {last[1]:.1f}, max {max(s[1] for s in samples):.1f}, "
-          f"growth over the second half {100.0 * growth:+.2f} %")
+    print(
+        f"resident MiB: at {warm[0]:.0f} s {warm[1]:.1f}, end {last[1]:.1f}, max {max(s[1] for s in samples):.1f}, "
+        f"growth over the second half {100.0 * growth:+.2f} %"
+    )
     print("samples (s: MiB): " + ", ".join(f"{s:.0f}: {m:.0f}" for s, m in samples[:: max(1, len(samples) // 10)]))
     for message in errors[:10]:
         print(message)

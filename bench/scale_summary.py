@@ -9,6 +9,7 @@ squares over the sizes from 10^5 to 10^7 triangles.
 
     python3 bench/scale_summary.py DIR
 """
+
 import json
 import math
 import pathlib
@@ -53,10 +54,24 @@ def main():
     directory = pathlib.Path(sys.argv[1])
     runs = load(directory)
     order = ["binned", "cbvh", "spatial", "embree-medium", "embree-high"]
-    runs.sort(key=lambda r: (order.index(r["builder"]) if r["builder"] in order else len(order), r["builder"], r["size"]))
+    runs.sort(
+        key=lambda r: (order.index(r["builder"]) if r["builder"] in order else len(order), r["builder"], r["size"])
+    )
     medium_ms = {r["size"]: r["json"]["build_ms"] for r in runs if r["builder"] == "embree-medium" and "json" in r}
-    header = ("builder", "N", "triangles", "build s", "ns/tri", "x medium", "build RSS MiB", "B/tri",
-              "process RSS MiB", "B/tri", "estimate MiB", "RSS/est")
+    header = (
+        "builder",
+        "N",
+        "triangles",
+        "build s",
+        "ns/tri",
+        "x medium",
+        "build RSS MiB",
+        "B/tri",
+        "process RSS MiB",
+        "B/tri",
+        "estimate MiB",
+        "RSS/est",
+    )
     rows = []
     fits = {}
     for run in runs:
@@ -71,13 +86,28 @@ def main():
         process_rss = run.get("time_rss", j["peak_rss_bytes"])
         estimate = j["scene_bytes"] + j["estimated_build_bytes"]
         ratio = f"{ms / medium_ms[run['size']]:.2f}" if run["size"] in medium_ms else "-"
-        rows.append((run["builder"], f"{run['size']:.0e}", str(n), f"{ms / 1000:.2f}", f"{ms * 1e6 / n:.0f}", ratio,
-                     f"{build_rss / MIB:.0f}", f"{build_rss / n:.0f}", f"{process_rss / MIB:.0f}",
-                     f"{process_rss / n:.0f}", f"{estimate / MIB:.0f}", f"{build_rss / estimate:.2f}"))
+        rows.append(
+            (
+                run["builder"],
+                f"{run['size']:.0e}",
+                str(n),
+                f"{ms / 1000:.2f}",
+                f"{ms * 1e6 / n:.0f}",
+                ratio,
+                f"{build_rss / MIB:.0f}",
+                f"{build_rss / n:.0f}",
+                f"{process_rss / MIB:.0f}",
+                f"{process_rss / n:.0f}",
+                f"{estimate / MIB:.0f}",
+                f"{build_rss / estimate:.2f}",
+            )
+        )
         if 1e5 <= run["size"] <= 1e7:
             fits.setdefault(run["builder"], []).append((n, ms))
-    widths = [max(len(str(row[i])) for row in [header] + [r for r in rows if len(r) == len(header)])
-              for i in range(len(header))]
+    widths = [
+        max(len(str(row[i])) for row in [header] + [r for r in rows if len(r) == len(header)])
+        for i in range(len(header))
+    ]
     print("  ".join(h.rjust(w) for h, w in zip(header, widths)))
     for row in rows:
         if len(row) == len(header):

@@ -3,6 +3,7 @@
 """The table of bench/ab_binaries.sh: per scene and ray kind (random and diffuse rays, closest hit and
 occlusion), the median over repetitions of our row's speed / Embree HIGH's own kernel's speed in the
 same process, for binary A and binary B, and B / A of those medians."""
+
 import collections
 import json
 import statistics

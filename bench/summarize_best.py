@@ -15,6 +15,7 @@ Each ratio comes from one compare run per scene (rows side by side); given sever
 (directories), each cell is the median of its per-run ratios.
 Usage: summarize_best.py [--embree-kernels] [--prefix P] FILE.json... | DIR...   (P: file prefix, default best)
 """
+
 import argparse
 import glob
 import json
@@ -52,8 +53,10 @@ def ratios(path, prefix, embree_kernels):
     if packet_rows:
         best_packet = max(packet_rows, key=lambda r: r["primary"]["closest_mrays"])
         packet_ratio = best_packet["primary"]["closest_mrays"] / packets["primary"]["closest_mrays"]
+
     def wrong_in(selected):
         return sum(r[kind].get("wrong", 0) for r in selected for kind in ("random", "primary", "diffuse"))
+
     embree = [r for r in rows if r["builder"].startswith("embree")]
     return name, cells, packet_ratio, (wrong_in(ours), wrong_in(embree))
 
@@ -85,15 +88,21 @@ def table_row(runs, embree_kernels):
     if embree_kernels:
         return f"| {name} | " + " | ".join(cells) + f" | {ours} | {embree} |"
     packet = sorted(run[2] for run in runs if run[2] is not None)
-    packet_cell = (f"{packet[len(packet) // 2]:.2f}" + (f" ({packet[0]:.2f}-{packet[-1]:.2f})" if len(runs) > 1 else "")
-                   if packet else "-")
+    packet_cell = (
+        f"{packet[len(packet) // 2]:.2f}" + (f" ({packet[0]:.2f}-{packet[-1]:.2f})" if len(runs) > 1 else "")
+        if packet
+        else "-"
+    )
     return f"| {name} | " + " | ".join(cells) + f" | {packet_cell} | {ours} | {embree} |"
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--embree-kernels", action="store_true",
-                        help="primary rays against rtcIntersect16/rtcOccluded16, the rest against rtcIntersect1/rtcOccluded1, goal 1.0")
+    parser.add_argument(
+        "--embree-kernels",
+        action="store_true",
+        help="primary rays against rtcIntersect16/rtcOccluded16, the rest against rtcIntersect1/rtcOccluded1, goal 1.0",
+    )
     parser.add_argument("--prefix", default="best", help="JSON file prefix: PREFIX_SCENE.json")
     parser.add_argument("paths", nargs="+", help="JSON files (one run) or directories (one run each)")
     args = parser.parse_args()
@@ -108,17 +117,24 @@ def main():
         groups = [[ratios(path, args.prefix, args.embree_kernels)] for path in args.paths]
     runs = len(groups[0]) if groups else 0
     if args.embree_kernels:
-        print(f"{runs} run(s); cell = median over runs of our fastest row / Embree HIGH's kernel for the ray kind "
-              "(rtcIntersect1/rtcOccluded1; primary: rtcIntersect16/rtcOccluded16), bold below 1.0")
+        print(
+            f"{runs} run(s); cell = median over runs of our fastest row / Embree HIGH's kernel for the ray kind "
+            "(rtcIntersect1/rtcOccluded1; primary: rtcIntersect16/rtcOccluded16), bold below 1.0"
+        )
         print()
-        print("| scene | random closest | random occl. | primary closest (/ rtcIntersect16) | primary occl. (/ rtcOccluded16) |"
-              " diffuse closest | diffuse occl. | our wrong answers | Embree's wrong answers |")
+        print(
+            "| scene | random closest | random occl. | primary closest (/ rtcIntersect16) |"
+            " primary occl. (/ rtcOccluded16) | diffuse closest | diffuse occl. | our wrong answers"
+            " | Embree's wrong answers |"
+        )
         print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     else:
         print(f"{runs} run(s); cell = median over runs of our fastest row / Embree HIGH single rays")
         print()
-        print("| scene | random closest | random occl. | primary closest | primary occl. | diffuse closest | diffuse occl. |"
-              " packets / rtcIntersect16 (primary) | our wrong answers | Embree's wrong answers |")
+        print(
+            "| scene | random closest | random occl. | primary closest | primary occl. | diffuse closest |"
+            " diffuse occl. | packets / rtcIntersect16 (primary) | our wrong answers | Embree's wrong answers |"
+        )
         print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for scene_runs in groups:
         print(table_row(scene_runs, args.embree_kernels))

@@ -7,6 +7,7 @@ Reads `spacebvh compare --json` files, one per run and scene, found by a pattern
 prints per scene and row the SAH, EPO, references and the median over runs of the row's Mrays/s
 divided by the first row's in the same run (random, primary, diffuse; closest hit, then occlusion).
 """
+
 import glob
 import json
 import os
@@ -24,7 +25,11 @@ def tree_rows(run):
 
 
 def main():
-    pattern = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "out", "co_sweep_{scene}_[0-9]*.json")
+    pattern = (
+        sys.argv[1]
+        if len(sys.argv) > 1
+        else os.path.join(os.path.dirname(__file__), "out", "co_sweep_{scene}_[0-9]*.json")
+    )
     for scene in SCENES:
         files = sorted(glob.glob(pattern.format(scene=scene)))
         if not files:
@@ -41,8 +46,10 @@ def main():
                     ratios.append(f"{statistics.median(per_run):.3f}")
             first = runs[0][name]
             epo = f"{first['epo']:6.2f}" if first.get("epo") is not None else "     -"
-            print(f"  {name:<26} SAH {first['sah']:6.2f} EPO {epo} refs {first['references']:7d}  "
-                  f"random {ratios[0]} {ratios[1]}  primary {ratios[2]} {ratios[3]}  diffuse {ratios[4]} {ratios[5]}")
+            print(
+                f"  {name:<26} SAH {first['sah']:6.2f} EPO {epo} refs {first['references']:7d}  "
+                f"random {ratios[0]} {ratios[1]}  primary {ratios[2]} {ratios[3]}  diffuse {ratios[4]} {ratios[5]}"
+            )
 
 
 if __name__ == "__main__":

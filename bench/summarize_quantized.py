@@ -9,6 +9,7 @@ the wrong answers of our rows; then every layout's bytes per triangle (nodes + l
 Embree: what its commit allocated), from the first directory.
 Usage: summarize_quantized.py DIR...   (each holding quantized_STEM.json)
 """
+
 import glob
 import json
 import os
@@ -33,7 +34,12 @@ def by_layout(path):
 
 
 def main(dirs):
-    stems = sorted({os.path.basename(p)[len("quantized_"):-len(".json")] for p in glob.glob(os.path.join(dirs[0], "quantized_*.json"))})
+    stems = sorted(
+        {
+            os.path.basename(p)[len("quantized_") : -len(".json")]
+            for p in glob.glob(os.path.join(dirs[0], "quantized_*.json"))
+        }
+    )
     header = [f"{a} / {b} {what}" for a, b in PAIRS for what in ("closest", "occl.")]
     print("| scene | rays | " + " | ".join(header) + " |")
     print("|---|---|" + "---:|" * len(header))
@@ -48,15 +54,23 @@ def main(dirs):
                     cells.append(f"{statistics.median(ratios):.2f}" if ratios else "-")
             print(f"| {stem} | {kind} | " + " | ".join(cells) + " |")
         for run in runs:
-            wrong += sum(row[kind].get("wrong", 0) for name, row in run.items() if name != "embree"
-                         for kind in ("random", "primary", "diffuse"))
+            wrong += sum(
+                row[kind].get("wrong", 0)
+                for name, row in run.items()
+                if name != "embree"
+                for kind in ("random", "primary", "diffuse")
+            )
     print(f"\nWrong answers of our rows, all runs: {wrong}\n")
     print("| scene | " + " | ".join(LAYOUTS) + " | Embree HIGH |")
     print("|---|" + "---:|" * (len(LAYOUTS) + 1))
     for stem in stems:
         rows = by_layout(os.path.join(dirs[0], f"quantized_{stem}.json"))
-        cells = [f"{rows[k].get('layout_bytes_per_triangle', rows[k].get('allocated_bytes_per_triangle')):.1f}"
-                 if k in rows else "-" for k in LAYOUTS + ["embree"]]
+        cells = [
+            f"{rows[k].get('layout_bytes_per_triangle', rows[k].get('allocated_bytes_per_triangle')):.1f}"
+            if k in rows
+            else "-"
+            for k in LAYOUTS + ["embree"]
+        ]
         print(f"| {stem} | " + " | ".join(cells) + " |")
     return 0 if wrong == 0 else 1
 

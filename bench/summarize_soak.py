@@ -6,6 +6,7 @@ Usage: python3 bench/summarize_soak.py bench/out/soak
 Ends with the coverage: per builder, the (kernel, scene) cells present out of every kernel and scene
 seen in the run, naming the missing ones. Exits 1 when any row of ours has a wrong answer (Embree's
 own rows are listed apart: Embree is not watertight and is expected to be wrong now and then)."""
+
 import json
 import pathlib
 import sys
@@ -44,8 +45,10 @@ def main() -> int:
                 fewest = min(counts) if fewest is None else min(fewest, min(counts))
                 print(f"{line} | {wrong} |")
     print()
-    print(f"ours: {answers} answers checked (closest + occlusion), {ours_wrong} wrong; "
-          f"fewest rays of one kind in a row: {fewest}")
+    print(
+        f"ours: {answers} answers checked (closest + occlusion), {ours_wrong} wrong; "
+        f"fewest rays of one kind in a row: {fewest}"
+    )
     if embree_lines:
         print()
         print("Embree HIGH's own rows, checked against our first row (Embree is not watertight):")
@@ -58,8 +61,10 @@ def main() -> int:
     print()
     for builder, covered in sorted(cells.items()):
         missing = [f"{k} on {s}" for k in kernels for s in scenes if (k, s) not in covered]
-        print(f"- {builder}: {len(covered)} of {len(kernels) * len(scenes)}"
-              + (f"; missing: {', '.join(missing)}" if missing else ""))
+        print(
+            f"- {builder}: {len(covered)} of {len(kernels) * len(scenes)}"
+            + (f"; missing: {', '.join(missing)}" if missing else "")
+        )
     return 1 if ours_wrong else 0
 
 

@@ -10,6 +10,7 @@ as the target (closest-hit samples for closest-hit targets, any-hit samples for 
 Spearman / Kendall (tau-b); 1 means the predictor orders the trees exactly as the target does.
 Usage: python3 bench/summarize_termination.py bench/out/termination
 """
+
 import glob
 import json
 import os
@@ -75,18 +76,20 @@ def scene_data(directory):
     """{tree: {"build": build json, (kernel, set, mode): stats json, ("time", kernel, mode): ms per Mray}}"""
     trees = {}
     for path in sorted(glob.glob(os.path.join(directory, "build_*.json"))):
-        tree = os.path.basename(path)[len("build_"):-len(".json")]
+        tree = os.path.basename(path)[len("build_") : -len(".json")]
         entry = {"build": load(path)}
         complete = True
         for kernel in KERNELS:
             for mode in MODES:
                 for ray_set in ("diffuse",) + SAMPLES:
-                    stats = os.path.join(directory, "stats_%s_%s_%s_%s.json" % (tree, kernel, ray_set, mode))
+                    stats = os.path.join(directory, f"stats_{tree}_{kernel}_{ray_set}_{mode}.json")
                     if not os.path.exists(stats):
                         complete = False
                         continue
                     entry[(kernel, ray_set, mode)] = load(stats)
-                times = [load(p) for p in glob.glob(os.path.join(directory, "time_%s_%s_diffuse_%s_*.json" % (tree, kernel, mode)))]
+                times = [
+                    load(p) for p in glob.glob(os.path.join(directory, f"time_{tree}_{kernel}_diffuse_{mode}_*.json"))
+                ]
                 if times:
                     fastest = min(times, key=lambda t: t["trace_ms"])
                     entry[("time", kernel, mode)] = fastest["trace_ms"] * 1e6 / fastest["rays"]  # ms per million rays
@@ -96,7 +99,7 @@ def scene_data(directory):
 
 
 def fmt_pair(x, y):
-    return "%.2f / %.2f" % (spearman(x, y), kendall(x, y))
+    return f"{spearman(x, y):.2f} / {kendall(x, y):.2f}"
 
 
 def main(root):
@@ -108,7 +111,11 @@ def main(root):
 
     print("## Trees: quality and what each ray set costs them (child boxes per ray; BVH8 kernel, binary in brackets)")
     print()
-    print("| scene | tree | build ms | SAH | EPO | diffuse occl. boxes | diffuse closest boxes | bounce occl. boxes | bounce closest boxes | area occl. boxes | area closest boxes | diffuse occl. Mrays/s | diffuse closest Mrays/s |")
+    print(
+        "| scene | tree | build ms | SAH | EPO | diffuse occl. boxes | diffuse closest boxes | bounce occl. boxes |"
+        " bounce closest boxes | area occl. boxes | area closest boxes | diffuse occl. Mrays/s |"
+        " diffuse closest Mrays/s |"
+    )
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for scene, trees in data.items():
         for tree, entry in trees.items():
@@ -116,19 +123,41 @@ def main(root):
             cells = []
             for ray_set in ("diffuse",) + SAMPLES:
                 for mode in MODES:
-                    cells.append("%.2f (%.2f)" % (entry[("bvh8", ray_set, mode)]["nodes_per_ray"], entry[("binary", ray_set, mode)]["nodes_per_ray"]))
+                    cells.append(
+                        "{:.2f} ({:.2f})".format(
+                            entry[("bvh8", ray_set, mode)]["nodes_per_ray"],
+                            entry[("binary", ray_set, mode)]["nodes_per_ray"],
+                        )
+                    )
             for mode in MODES:
-                speeds = ["%.1f" % (1000.0 / entry[("time", kernel, mode)]) if ("time", kernel, mode) in entry else "-" for kernel in KERNELS]
-                cells.append("%s (%s)" % tuple(speeds))
-            print("| %s | %s | %.0f | %.2f | %.3f | %s |" % (scene, tree, build["build_ms"], build["sah"], build.get("epo", float("nan")), " | ".join(cells)))
+                speeds = [
+                    "%.1f" % (1000.0 / entry[("time", kernel, mode)]) if ("time", kernel, mode) in entry else "-"
+                    for kernel in KERNELS
+                ]
+                cells.append("{} ({})".format(*tuple(speeds)))
+            print(
+                "| {} | {} | {:.0f} | {:.2f} | {:.3f} | {} |".format(
+                    scene, tree, build["build_ms"], build["sah"], build.get("epo", float("nan")), " | ".join(cells)
+                )
+            )
     print()
 
-    predictors = [("SAH", lambda e, k, m: e["build"]["sah"]), ("EPO", lambda e, k, m: e["build"].get("epo", float("nan")))]
+    predictors = [
+        ("SAH", lambda e, k, m: e["build"]["sah"]),
+        ("EPO", lambda e, k, m: e["build"].get("epo", float("nan"))),
+    ]
     for sample in SAMPLES:
-        predictors.append(("%s boxes" % sample, lambda e, k, m, s=sample: e[(k, s, m)]["nodes_per_ray"]))
-        predictors.append(("%s boxes+tris" % sample, lambda e, k, m, s=sample: e[(k, s, m)]["nodes_per_ray"] + e[(k, s, m)]["triangles_per_ray"]))
-    targets = [("boxes", lambda e, k, m: e[(k, "diffuse", m)]["nodes_per_ray"]),
-               ("time", lambda e, k, m: e.get(("time", k, m), float("nan")))]
+        predictors.append((f"{sample} boxes", lambda e, k, m, s=sample: e[(k, s, m)]["nodes_per_ray"]))
+        predictors.append(
+            (
+                f"{sample} boxes+tris",
+                lambda e, k, m, s=sample: e[(k, s, m)]["nodes_per_ray"] + e[(k, s, m)]["triangles_per_ray"],
+            )
+        )
+    targets = [
+        ("boxes", lambda e, k, m: e[(k, "diffuse", m)]["nodes_per_ray"]),
+        ("time", lambda e, k, m: e.get(("time", k, m), float("nan"))),
+    ]
 
     print("## Rank correlation with the diffuse rays (Spearman / Kendall tau-b, over the trees of each scene)")
     print()
@@ -148,7 +177,7 @@ def main(root):
                         x = [predictor(e, kernel, mode) for e in entries]
                         cells.append(fmt_pair(x, y))
                         summary.setdefault((kernel, mode, target_name, name), []).append(spearman(x, y))
-                    print("| %s | %d | %s | %s | %s | %s |" % (scene, len(entries), kernel, mode, target_name, " | ".join(cells)))
+                    print(f"| {scene} | {len(entries)} | {kernel} | {mode} | {target_name} | {' | '.join(cells)} |")
     print()
     print("## Mean Spearman over the scenes")
     print()
@@ -160,8 +189,8 @@ def main(root):
                 cells = []
                 for name, _ in predictors:
                     values = [v for v in summary.get((kernel, mode, target_name, name), []) if v == v]
-                    cells.append("%.2f (%d)" % (sum(values) / len(values), len(values)) if values else "-")
-                print("| %s | %s | %s | %s |" % (kernel, mode, target_name, " | ".join(cells)))
+                    cells.append(f"{sum(values) / len(values):.2f} ({len(values)})" if values else "-")
+                print("| {} | {} | {} | {} |".format(kernel, mode, target_name, " | ".join(cells)))
 
 
 if __name__ == "__main__":

@@ -3,7 +3,8 @@
 
 Not a test: it times intersects_first, intersects_any, intersects_location (multiple hits) and
 contains_points on the bunny and crytek_sponza from the shared scenes ($SPACEBVH_SCENES, default
-../shared/scenes beside the checkout) and prints rays per second and the ratios. Needs `pip install trimesh embreex` and spacebvh in the same environment.
+../shared/scenes beside the checkout) and prints rays per second and the ratios. Needs
+`pip install trimesh embreex` and spacebvh in the same environment.
 
     python bench/trimesh_drop_in.py [--rays 1000000] [--threads 2] [--scenes bunny crytek_sponza]
 
@@ -73,11 +74,13 @@ def main():
     parser.add_argument("--repeat", type=int, default=1, help="runs of each query pair; medians are printed")
     args = parser.parse_args()
 
-    import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
     import embreex
+    import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
 
-    print(f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "
-          f"{args.rays} rays, spacebvh threads={args.threads}, builder {args.builder}, medians of {args.repeat} runs")
+    print(
+        f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "
+        f"{args.rays} rays, spacebvh threads={args.threads}, builder {args.builder}, medians of {args.repeat} runs"
+    )
     rows = []
     for name in args.scenes:
         path = SCENES / name / f"{name}.obj"
@@ -95,13 +98,19 @@ def main():
         # Builds, apart from the queries.
         build_theirs, _ = timed(theirs.ray.intersects_first, origins[:1], directions[:1])
         build_ours, _ = timed(ours.ray.intersects_first, origins[:1], directions[:1])
-        print(f"\n{name}: {len(faces)} triangles; first-query build: embree {build_theirs:.2f} s, spacebvh {build_ours:.2f} s")
+        print(
+            f"\n{name}: {len(faces)} triangles; first-query build: embree {build_theirs:.2f} s, "
+            f"spacebvh {build_ours:.2f} s"
+        )
 
         queries = [
-            ("intersects_first", lambda m: m.ray.intersects_first(origins, directions)),
-            ("intersects_any", lambda m: m.ray.intersects_any(origins, directions)),
-            ("intersects_location", lambda m: m.ray.intersects_location(origins, directions, multiple_hits=True)),
-            ("contains_points", lambda m: m.ray.contains_points(points)),
+            ("intersects_first", lambda m, o=origins, d=directions: m.ray.intersects_first(o, d)),
+            ("intersects_any", lambda m, o=origins, d=directions: m.ray.intersects_any(o, d)),
+            (
+                "intersects_location",
+                lambda m, o=origins, d=directions: m.ray.intersects_location(o, d, multiple_hits=True),
+            ),
+            ("contains_points", lambda m, p=points: m.ray.contains_points(p)),
         ]
         for label, query in queries:
             # Side by side, `repeat` times; each figure below is the median over the runs.
@@ -118,9 +127,12 @@ def main():
                 agree = np.mean(np.asarray(a) == np.asarray(b))
                 hits = ""
             rows.append((name, label, args.rays / t_theirs / 1e6, args.rays / t_ours / 1e6, ratio, cpu_ratio))
-            print(f"  {label:20s} embree {args.rays / t_theirs / 1e6:7.3f} Mrays/s ({t_theirs:6.2f} s)   "
-                  f"spacebvh {args.rays / t_ours / 1e6:7.3f} Mrays/s ({t_ours:6.2f} s)   "
-                  f"ratio {ratio:6.1f}x (cpu {cpu_ratio:5.1f}x)   same answer {100 * agree:.2f} %{hits}", flush=True)
+            print(
+                f"  {label:20s} embree {args.rays / t_theirs / 1e6:7.3f} Mrays/s ({t_theirs:6.2f} s)   "
+                f"spacebvh {args.rays / t_ours / 1e6:7.3f} Mrays/s ({t_ours:6.2f} s)   "
+                f"ratio {ratio:6.1f}x (cpu {cpu_ratio:5.1f}x)   same answer {100 * agree:.2f} %{hits}",
+                flush=True,
+            )
 
     # The CPU ratio is the work ratio (trimesh+embreex runs on one thread, spacebvh on `threads`): on a
     # machine with idle cores for every thread, the wall ratio approaches it times the thread count; on

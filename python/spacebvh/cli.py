@@ -8,7 +8,7 @@ import shutil
 import subprocess
 import sys
 import sysconfig
-from typing import Sequence
+from collections.abc import Sequence
 
 __all__ = ["executable", "run"]
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import sys
 import types
-from typing import Any, Optional, Tuple
+from typing import Any, Optional
 
 import numpy as np
 
@@ -40,7 +40,7 @@ def _rows(array: Any, name: str) -> np.ndarray:
     return result
 
 
-def _rays(ray_origins: Any, ray_directions: Any) -> Tuple[np.ndarray, np.ndarray]:
+def _rays(ray_origins: Any, ray_directions: Any) -> tuple[np.ndarray, np.ndarray]:
     origins = _rows(ray_origins, "ray_origins")
     directions = _rows(ray_directions, "ray_directions")
     if origins.shape != directions.shape:
@@ -64,7 +64,9 @@ class RayMeshIntersector:
       Threads of the batch queries (0 = every core).
     """
 
-    def __init__(self, geometry: Any, scale_to_box: bool = True, builder: str = "binned", threads: int = 0, **kwargs: Any):
+    def __init__(
+        self, geometry: Any, scale_to_box: bool = True, builder: str = "binned", threads: int = 0, **kwargs: Any
+    ):
         self.mesh = geometry
         self._scale_to_box = scale_to_box
         self._builder = builder
@@ -131,7 +133,11 @@ class RayMeshIntersector:
     def intersects_location(self, ray_origins: Any, ray_directions: Any, multiple_hits: bool = True, **kwargs: Any):
         """Where rays hit: ``(locations (m, 3) float64, index_ray (m,) int64, index_tri (m,) int64)``."""
         index_tri, index_ray, locations = self.intersects_id(
-            ray_origins=ray_origins, ray_directions=ray_directions, multiple_hits=multiple_hits, return_locations=True, **kwargs
+            ray_origins=ray_origins,
+            ray_directions=ray_directions,
+            multiple_hits=multiple_hits,
+            return_locations=True,
+            **kwargs,
         )
         return locations, index_ray, index_tri
 
@@ -179,13 +185,15 @@ class RayMeshIntersector:
         self.__dict__.update(state)
 
     def __copy__(self, *args):
-        return RayMeshIntersector(self.mesh, scale_to_box=self._scale_to_box, builder=self._builder, threads=self._threads)
+        return RayMeshIntersector(
+            self.mesh, scale_to_box=self._scale_to_box, builder=self._builder, threads=self._threads
+        )
 
     def __deepcopy__(self, *args):
         return self.__copy__()
 
 
-_saved: Optional[Tuple[Any, Any, Any]] = None
+_saved: Optional[tuple[Any, Any, Any]] = None
 
 
 def patch() -> None:
@@ -197,8 +205,14 @@ def patch() -> None:
     import trimesh.ray as ray_module
 
     if _saved is None:
-        _saved = (ray_module.has_embree, getattr(ray_module, "ray_pyembree", None), sys.modules.get("trimesh.ray.ray_pyembree"))
-    shim = types.ModuleType("trimesh.ray.ray_pyembree", "spacebvh's exact intersector in place of trimesh's Embree backend")
+        _saved = (
+            ray_module.has_embree,
+            getattr(ray_module, "ray_pyembree", None),
+            sys.modules.get("trimesh.ray.ray_pyembree"),
+        )
+    shim = types.ModuleType(
+        "trimesh.ray.ray_pyembree", "spacebvh's exact intersector in place of trimesh's Embree backend"
+    )
     shim.RayMeshIntersector = RayMeshIntersector  # type: ignore[attr-defined]
     ray_module.ray_pyembree = shim
     ray_module.has_embree = True

@@ -2,6 +2,7 @@
 """Tests of spacebvh.Tracer64 (float64 meshes traced exactly) against an independent exact reference
 in rational arithmetic (fractions.Fraction): rays exactly through vertices and edge midpoints of closed
 boxes at 10^7 offsets and at 10^-6 scale, and the large-coordinate case of the trimesh drop-in."""
+
 import itertools
 import unittest
 from fractions import Fraction
@@ -26,12 +27,14 @@ def closed_box(centre, step, cells):
     half = cells / 2
     for axis, side in itertools.product(range(3), (-half, half)):
         for i, j in itertools.product(range(cells), repeat=2):
+
             def corner(di, dj):
                 p = [0.0, 0.0, 0.0]
                 p[axis] = side
                 p[(axis + 1) % 3] = -half + i + di
                 p[(axis + 2) % 3] = -half + j + dj
                 return vertex(p)
+
             faces.append([corner(0, 0), corner(1, 0), corner(1, 1)])
             faces.append([corner(0, 0), corner(1, 1), corner(0, 1)])
     return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
@@ -62,8 +65,15 @@ def exact_closest_t(vertices, faces, origin, direction):
         p = [a + t * b for a, b in zip(o, d)]
         corners = (v0, v1, v2)
         inside = all(
-            dot(cross([a - b for a, b in zip(corners[(k + 1) % 3], p)], [a - b for a, b in zip(corners[(k + 2) % 3], p)]), n) >= 0
-            for k in range(3))
+            dot(
+                cross(
+                    [a - b for a, b in zip(corners[(k + 1) % 3], p)], [a - b for a, b in zip(corners[(k + 2) % 3], p)]
+                ),
+                n,
+            )
+            >= 0
+            for k in range(3)
+        )
         if inside and (best is None or t < best):
             best = t
     return best
@@ -71,7 +81,7 @@ def exact_closest_t(vertices, faces, origin, direction):
 
 class Tracer64Test(unittest.TestCase):
     def test_rays_through_vertices_and_edges_equal_the_rational_reference(self):
-        for centre, step in (((1e7, -1e7, 1e7), 2.0 ** -20), ((0.5, 0.25, -0.75), 2.0 ** -22)):
+        for centre, step in (((1e7, -1e7, 1e7), 2.0**-20), ((0.5, 0.25, -0.75), 2.0**-22)):
             vertices, faces = closed_box(centre, step, 2)
             tracer = spacebvh.Tracer64(vertices, faces, builder="sbvh")
             outside = np.array(centre) + np.array([5.0, 2.5, -4.0]) * step

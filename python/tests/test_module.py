@@ -2,6 +2,7 @@
 """Tests of the module's scenes, builders, tracers, rays, files and images against an independent
 NumPy brute force (double-precision Moller-Trumbore over every triangle). Run with pytest against
 the installed package (scripts/test.sh installs it into a fresh virtual environment)."""
+
 import math
 import os
 import pathlib
@@ -70,7 +71,7 @@ class SceneTests(unittest.TestCase):
         scene = spacebvh.load_scene("builtin:organic")
         self.assertGreater(scene.triangle_count, 0)
         lo, hi = scene.bounds
-        self.assertTrue(all(l <= h for l, h in zip(lo, hi)))
+        self.assertTrue(all(low <= high for low, high in zip(lo, hi)))
 
     def test_load_time_transform_and_primary_rays(self):
         plain = spacebvh.load_scene("builtin:organic")
@@ -131,7 +132,8 @@ class TracingTests(unittest.TestCase):
         cls.scene = spacebvh.mesh(flat, np.arange(flat.shape[0]).reshape(-1, 3), "soup400")
         cls.origins, cls.directions = spacebvh.random_rays(cls.scene, 1500, seed=3)
         cls.expected_t, cls.expected_prim, cls.decided = brute_force(
-            cls.vertices, cls.origins, cls.directions, 0.0, math.inf)
+            cls.vertices, cls.origins, cls.directions, 0.0, math.inf
+        )
         # The comparison must be about something: most rays decided, many of them hits.
         assert cls.decided.mean() > 0.9
         assert np.count_nonzero(cls.expected_prim[cls.decided] >= 0) > 200
@@ -143,7 +145,9 @@ class TracingTests(unittest.TestCase):
         hit = d & (self.expected_prim >= 0)
         np.testing.assert_allclose(t[hit], self.expected_t[hit], rtol=1e-5, err_msg=tracer.kernel)
         self.assertTrue(np.all(np.isinf(t[prim < 0])))
-        self.assertTrue(np.all((u[prim >= 0] >= -1e-6) & (v[prim >= 0] >= -1e-6) & (u[prim >= 0] + v[prim >= 0] <= 1 + 1e-5)))
+        self.assertTrue(
+            np.all((u[prim >= 0] >= -1e-6) & (v[prim >= 0] >= -1e-6) & (u[prim >= 0] + v[prim >= 0] <= 1 + 1e-5))
+        )
         # Occlusion within [0, tmax]: blocked exactly where the closest hit lies within it.
         blocked = tracer.occluded(self.origins, self.directions, 0.0, 1.0)
         clear = d & (np.abs(self.expected_t - 1.0) > 1e-5)  # no hit too close to tmax to call
@@ -208,7 +212,9 @@ class TracingTests(unittest.TestCase):
         gated = spacebvh.build(self.scene, "spatial", spatial_gate=1.0)
         ungated = spacebvh.build(self.scene, "spatial", spatial_gate=0.0)
         self.assertLess(gated.reference_count, ungated.reference_count)
-        self.assertNotEqual(spacebvh.build(self.scene, "spatial", spatial_gate=0.0, spatial_bins=4).stats(), ungated.stats())
+        self.assertNotEqual(
+            spacebvh.build(self.scene, "spatial", spatial_gate=0.0, spatial_bins=4).stats(), ungated.stats()
+        )
         # object_bins is --bins: the binned builder's bins (the CLI's tree, to the last digit).
         coarse = spacebvh.build(self.scene, "binned", object_bins=4)
         self.assertNotEqual(coarse.sah, spacebvh.build(self.scene, "binned").sah)
@@ -239,7 +245,9 @@ class TracingTests(unittest.TestCase):
             np.testing.assert_array_equal(x, y)
 
     def test_per_ray_ranges(self):
-        tracer = spacebvh.Tracer(spacebvh.build(self.scene, "spatial"), "bvh8" if "bvh8" in spacebvh.kernels() else "binary")
+        tracer = spacebvh.Tracer(
+            spacebvh.build(self.scene, "spatial"), "bvh8" if "bvh8" in spacebvh.kernels() else "binary"
+        )
         n = self.origins.shape[0]
         tmax = np.where(np.arange(n) % 2 == 0, 1.0, np.inf).astype(np.float32)
         t, prim, _, _ = tracer.intersect(self.origins, self.directions, 0.0, tmax)
@@ -252,8 +260,10 @@ class TracingTests(unittest.TestCase):
         np.testing.assert_array_equal(prim[clear], np.where(within, self.expected_prim, -1)[clear])
         np.testing.assert_array_equal(tracer.occluded(self.origins, self.directions, 0.0, tmax)[clear], within[clear])
         # A NumPy scalar is the same as a number; arrays of the wrong length are refused.
-        np.testing.assert_array_equal(tracer.intersect(self.origins, self.directions, np.float32(0), np.float32(1.0))[1],
-                                      tracer.intersect(self.origins, self.directions, 0.0, 1.0)[1])
+        np.testing.assert_array_equal(
+            tracer.intersect(self.origins, self.directions, np.float32(0), np.float32(1.0))[1],
+            tracer.intersect(self.origins, self.directions, 0.0, 1.0)[1],
+        )
         with self.assertRaisesRegex(spacebvh.Error, "one per ray"):
             tracer.intersect(self.origins, self.directions, 0.0, tmax[:-1])
         bad = tmax.copy()
@@ -264,8 +274,9 @@ class TracingTests(unittest.TestCase):
     def test_diffuse_rays_follow_the_spec(self):
         # A floor of two triangles and a slanted triangle above it, seen from above: every primary
         # hit's normal is known here, independently of the module.
-        vertices = np.array([[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4],
-                             [-1, 1, -1], [1, 1, -1], [0, 2, 1]], dtype=np.float32)
+        vertices = np.array(
+            [[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4], [-1, 1, -1], [1, 1, -1], [0, 2, 1]], dtype=np.float32
+        )
         indices = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6]])
         scene = spacebvh.mesh(vertices, indices)
         tracer = spacebvh.Tracer(spacebvh.build(scene, "cbvh"))
@@ -324,8 +335,26 @@ class TracingTests(unittest.TestCase):
         with tempfile.TemporaryDirectory() as folder:
             primary_path, diffuse_path = os.path.join(folder, "p.rays"), os.path.join(folder, "d.rays")
             for kind, path in (("primary", primary_path), ("diffuse", diffuse_path)):
-                subprocess.run([cli, "rays", "builtin:organic", "--kind", kind, "--seed", "5", "--width", "64",
-                                "--height", "48", "-o", path, "-q"], check=True, capture_output=True)
+                subprocess.run(
+                    [
+                        cli,
+                        "rays",
+                        "builtin:organic",
+                        "--kind",
+                        kind,
+                        "--seed",
+                        "5",
+                        "--width",
+                        "64",
+                        "--height",
+                        "48",
+                        "-o",
+                        path,
+                        "-q",
+                    ],
+                    check=True,
+                    capture_output=True,
+                )
             origins, directions, _, _ = spacebvh.read_rays(primary_path)
             expected_origins, expected_directions, _, _ = spacebvh.read_rays(diffuse_path)
         scene = spacebvh.load_scene("builtin:organic")
@@ -361,7 +390,9 @@ class TracingTests(unittest.TestCase):
         self.assertGreater(info["legend_height"], 0)
         self.assertGreater(info["nodes_visited"], 1200)  # every pixel tests at least the root's boxes
         self.assertGreater(info["max_value"], info["mean_value"])
-        shared, shared_info = tracer.render(40, 30, camera, heatmap=True, quantity="nodes", scale_max=500.0, legend=False)
+        shared, shared_info = tracer.render(
+            40, 30, camera, heatmap=True, quantity="nodes", scale_max=500.0, legend=False
+        )
         self.assertEqual(shared.shape, (30, 40, 3))
         self.assertEqual(shared_info["scale_max"], 500.0)
         self.assertEqual(shared_info["triangles_tested"], info["triangles_tested"])

@@ -26,7 +26,9 @@ def grid_mesh(n=6, dtype=np.float32, offset=(0.0, 0.0, 0.0)):
 def down_rays(count, n=6, seed=5, height=1.0, offset=(0.0, 0.0, 0.0)):
     """Rays from above the grid straight down, at random points over it."""
     rng = np.random.default_rng(seed)
-    origins = np.column_stack([rng.uniform(0.05, n - 0.05, count), rng.uniform(0.05, n - 0.05, count), np.full(count, height)])
+    origins = np.column_stack(
+        [rng.uniform(0.05, n - 0.05, count), rng.uniform(0.05, n - 0.05, count), np.full(count, height)]
+    )
     return origins + np.asarray(offset), np.tile([0.0, 0.0, -1.0], (count, 1))
 
 
@@ -44,7 +46,9 @@ def test_error_is_runtime_and_value_error():
     assert issubclass(spacebvh.Error, ValueError)
 
 
-@pytest.mark.parametrize("index_dtype", [np.int8, np.uint8, np.int16, np.uint16, np.int32, np.uint32, np.int64, np.uint64])
+@pytest.mark.parametrize(
+    "index_dtype", [np.int8, np.uint8, np.int16, np.uint16, np.int32, np.uint32, np.int64, np.uint64]
+)
 def test_faces_of_any_integer_dtype(grid, index_dtype):
     vertices, faces, tracer, origins, directions = grid
     expected = tracer.intersect(origins, directions)
@@ -66,9 +70,11 @@ def test_memory_orders_and_views_read_in_place(grid):
     strided = spacebvh.mesh(wide[:, ::2], faces[::-1][::-1])
     np.testing.assert_array_equal(strided.triangles(), vertices[faces])
     # Rays: Fortran order, a transposed view, float64.
-    for o, d in ((np.asfortranarray(origins), np.asfortranarray(directions)),
-                 (np.ascontiguousarray(origins.T).T, directions),
-                 (origins.astype(np.float64), directions.astype(np.float64))):
+    for o, d in (
+        (np.asfortranarray(origins), np.asfortranarray(directions)),
+        (np.ascontiguousarray(origins.T).T, directions),
+        (origins.astype(np.float64), directions.astype(np.float64)),
+    ):
         got = tracer.intersect(o, d)
         for a, b in zip(got, expected):
             np.testing.assert_array_equal(a, b)
@@ -128,7 +134,9 @@ def test_other_real_dtypes_are_converted(grid):
     # Integer vertices and float16 rays: exact in float64, so the same answers.
     scene = spacebvh.mesh(vertices.astype(np.int32), faces)
     assert scene.dtype == np.float64
-    t, primitive, _, _ = spacebvh.Tracer(spacebvh.build(scene)).intersect(origins.astype(np.float64), directions.astype(np.float16))
+    t, primitive, _, _ = spacebvh.Tracer(spacebvh.build(scene)).intersect(
+        origins.astype(np.float64), directions.astype(np.float16)
+    )
     np.testing.assert_array_equal(primitive, tracer.intersect(origins, directions)[1])
     big_endian = spacebvh.mesh(vertices.astype(">f8"), faces.astype(">i4"))
     np.testing.assert_array_equal(big_endian.triangles(), vertices[faces])

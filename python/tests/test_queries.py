@@ -100,6 +100,7 @@ def grid_box(n, size=None):
         for side in (0, 1):
             for i in range(n):
                 for j in range(n):
+
                     def corner(di, dj):
                         p = [0.0, 0.0, 0.0]
                         p[axis] = size if side else 0.0
@@ -167,8 +168,13 @@ def test_rays_through_vertices_and_edges_cross_once():
     vertices, faces = grid_box(3)
     queries = queries_for(vertices, faces)
     triangles = exact_triangles(vertices, faces)
-    targets = np.concatenate([vertices, (vertices[faces[:, 0]] + vertices[faces[:, 1]]) / 2,
-                              (vertices[faces[:, 1]] + vertices[faces[:, 2]]) / 2])
+    targets = np.concatenate(
+        [
+            vertices,
+            (vertices[faces[:, 0]] + vertices[faces[:, 1]]) / 2,
+            (vertices[faces[:, 1]] + vertices[faces[:, 2]]) / 2,
+        ]
+    )
     for origin in ([1.5, 2.5, 3.5], [3.0, 3.0, 3.0], [0.5, 5.5, 2.0]):
         origins = np.tile(np.float32(origin), (len(targets), 1))
         directions = (targets - origins).astype(np.float32)
@@ -219,7 +225,7 @@ def test_containment_is_stable_and_matches_parity():
     rng = np.random.default_rng(3)
     points = np.concatenate([rng.uniform(-1, 7, (3000, 3)), vertices, rng.integers(0, 7, (500, 3))]).astype(np.float32)
     first = queries_for(vertices, faces).contains(points)
-    for run in range(10):
+    for _ in range(10):
         for threads in (1, 2):
             assert np.array_equal(queries_for(vertices, faces, threads=threads).contains(points), first)
             assert np.array_equal(queries_for(vertices, faces).contains(points, threads=threads), first)

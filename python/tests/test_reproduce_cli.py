@@ -39,8 +39,14 @@ def _without_the_command_on_path(tmp_path: Path) -> dict:
 def test_find_cli_uses_the_command_installed_beside_the_interpreter(tmp_path):
     expected = _installed_command()
     code = "from spacebvh.reproduce.jobs import find_cli; print(find_cli())"
-    done = subprocess.run([sys.executable, "-c", code], env=_without_the_command_on_path(tmp_path), cwd=tmp_path,
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", code],
+        env=_without_the_command_on_path(tmp_path),
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == expected
 
@@ -49,10 +55,25 @@ def test_reproduce_runs_from_an_environment_that_is_not_activated(tmp_path):
     pytest.importorskip("matplotlib")
     _installed_command()
     out = tmp_path / "report"
-    done = subprocess.run([sys.executable, "-m", "spacebvh.reproduce", "--quick", "--report-only", "--no-progress",
-                           "--experiments", "optimum", "--out", str(out)],
-                          env=_without_the_command_on_path(tmp_path), cwd=tmp_path, capture_output=True, text=True,
-                          timeout=600)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "spacebvh.reproduce",
+            "--quick",
+            "--report-only",
+            "--no-progress",
+            "--experiments",
+            "optimum",
+            "--out",
+            str(out),
+        ],
+        env=_without_the_command_on_path(tmp_path),
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr[-4000:]
     assert "spacebvh CLI not found" not in done.stderr
     assert (out / "index.html").is_file()

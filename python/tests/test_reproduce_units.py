@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The parts of spacebvh.reproduce that need no CLI: scene specifications, job keys, the store, the
 ratios between rows and the deterministic view of a result."""
+
 from __future__ import annotations
 
 import importlib.util
@@ -14,14 +15,14 @@ PYTHON_DIR = Path(__file__).resolve().parents[1]
 # An installed package (pip install .) is used as it is; a checkout's python/ only when none has reproduce.
 _installed = importlib.util.find_spec("spacebvh")
 ON_PATH = _installed is not None and any(
-    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or []))
+    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or [])
+)
 if not ON_PATH:
     sys.path.insert(0, str(PYTHON_DIR))
 
 from spacebvh.reproduce.jobs import generated_scene  # noqa: E402
 from spacebvh.reproduce.results import deterministic, row_label, speed_ratio  # noqa: E402
-from spacebvh.reproduce.scenes import (  # noqa: E402
-    content_hash, default_full_scenes, parse_scene, scene_manifest, shared_scenes_dir)
+from spacebvh.reproduce.scenes import content_hash, default_full_scenes, parse_scene, scene_manifest, shared_scenes_dir  # noqa: E402
 from spacebvh.reproduce.store import Store, job_key  # noqa: E402
 
 
@@ -119,8 +120,23 @@ def test_speed_ratios_pair_the_runs_of_one_round_robin():
 
 
 def test_deterministic_drops_timings_and_keeps_answers():
-    result = [{"threads": 2, "scenes": [{"rows": [{"builder": "cbvh", "build_ms": 3.0, "sah": 1.0 / 3,
-                                                   "random": {"closest_mrays": 5.0, "wrong": 0}}]}]}]
+    result = [
+        {
+            "threads": 2,
+            "scenes": [
+                {
+                    "rows": [
+                        {
+                            "builder": "cbvh",
+                            "build_ms": 3.0,
+                            "sah": 1.0 / 3,
+                            "random": {"closest_mrays": 5.0, "wrong": 0},
+                        }
+                    ]
+                }
+            ],
+        }
+    ]
     kept = deterministic(result)
     assert kept == [{"scenes": [{"rows": [{"builder": "cbvh", "sah": round(1.0 / 3, 9), "random": {"wrong": 0}}]}]}]
     assert json.dumps(kept)
@@ -140,21 +156,42 @@ def test_termination_counts_the_cells_where_spatial_tests_fewer_boxes_than_cbvh(
     from spacebvh.reproduce.scenes import Scene
 
     def row(builder, boxes, occlusion_boxes, sah=None):
-        kinds = {k: {"closest_ms_runs": [2.0, 2.0], "occlusion_ms_runs": [1.0, 1.0], "closest_mrays": 1.0,
-                     "occlusion_mrays": 2.0, "wrong": 0} for k in ("random", "primary", "diffuse")}
+        kinds = {
+            k: {
+                "closest_ms_runs": [2.0, 2.0],
+                "occlusion_ms_runs": [1.0, 1.0],
+                "closest_mrays": 1.0,
+                "occlusion_mrays": 2.0,
+                "wrong": 0,
+            }
+            for k in ("random", "primary", "diffuse")
+        }
         if sah is not None:
             for k in kinds:
                 kinds[k].update(nodes_per_ray=boxes, occlusion_nodes_per_ray=occlusion_boxes)
-        return {"builder": builder + (" (C_o=1.00)" if sah is not None else ""), "kernel": "bvh8",
-                **({"sah": sah} if sah is not None else {}), **kinds}
+        return {
+            "builder": builder + (" (C_o=1.00)" if sah is not None else ""),
+            "kernel": "bvh8",
+            **({"sah": sah} if sah is not None else {}),
+            **kinds,
+        }
 
-    rows = [row("cbvh", 20.0, 8.0, 12.0), row("spatial", 16.0, 10.0, 10.0), row(Termination.SAMPLED, 15.0, 9.0, 10.5),
-            row("binned+opt", 14.0, 6.0, 9.0), row("embree-high", 17.0, 11.0, 11.0), row("embree-high", 0, 0)]
+    rows = [
+        row("cbvh", 20.0, 8.0, 12.0),
+        row("spatial", 16.0, 10.0, 10.0),
+        row(Termination.SAMPLED, 15.0, 9.0, 10.5),
+        row("binned+opt", 14.0, 6.0, 9.0),
+        row("embree-high", 17.0, 11.0, 11.0),
+        row("embree-high", 0, 0),
+    ]
     record = {"outputs": [{"scenes": [{"rows": rows}]}]}
     analysis = Termination("termination", "t", "c", "s", "compare", "m").analyse([(Scene("builtin:interior"), record)])
     # spatial beats cbvh on closest-hit boxes (16 < 20) of every kind, loses on occlusion boxes (10 > 8)
     assert analysis.verdict == "partly confirmed"
     assert "3 of 6" in analysis.summary
     assert analysis.plot["boxes"]["binned+opt"][0]["diffuse"] == (14.0 / 16.0, 6.0 / 10.0)
-    assert "embree-high (Embree kernel)" in analysis.plot["speed"] and "embree-high (Embree kernel)" not in analysis.plot["boxes"]
+    assert (
+        "embree-high (Embree kernel)" in analysis.plot["speed"]
+        and "embree-high (Embree kernel)" not in analysis.plot["boxes"]
+    )
     assert len(analysis.table_rows) == 6 and analysis.table_rows[1][3] == "1.000"

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Tree files and pickling from Python: a saved or pickled tree answers exactly as the tree it came
 from, and damaged or mismatched files raise spacebvh.Error naming the file."""
+
 import pickle
 
 import numpy as np
@@ -37,8 +38,9 @@ def test_pickled_tree_and_scene_round_trip(scene):
     copy = pickle.loads(pickle.dumps(bvh))
     assert copy.scene.triangle_count == scene.triangle_count and copy.sah == bvh.sah
     origins, directions = _rays(scene)
-    np.testing.assert_array_equal(spacebvh.Tracer(bvh).occluded(origins, directions),
-                                  spacebvh.Tracer(copy).occluded(origins, directions))
+    np.testing.assert_array_equal(
+        spacebvh.Tracer(bvh).occluded(origins, directions), spacebvh.Tracer(copy).occluded(origins, directions)
+    )
 
 
 def test_damaged_and_mismatched_files_are_refused(tmp_path, scene):

@@ -27,9 +27,24 @@ def test_trimesh_test_ray_passes_with_spacebvh():
     # The plugin module lives beside this file; the child pytest finds it through PYTHONPATH.
     env["PYTHONPATH"] = str(HERE) + os.pathsep + env.get("PYTHONPATH", "")
     result = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "spacebvh_trimesh_route", "-p", "no:cacheprovider",
-         "--rootdir", str(SUITE.parent), str(SUITE)],
-        cwd=str(SUITE.parent), env=env, capture_output=True, text=True, timeout=900,
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "spacebvh_trimesh_route",
+            "-p",
+            "no:cacheprovider",
+            "--rootdir",
+            str(SUITE.parent),
+            str(SUITE),
+        ],
+        cwd=str(SUITE.parent),
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
     )
     print(result.stdout[-6000:])
     print(result.stderr[-3000:])

@@ -2,6 +2,7 @@
 """One matplotlib figure per experiment, written as SVG and PNG. Every builder has one colour in every
 figure (BUILDER_COLOURS); Embree's own kernel is drawn in its tree's colour with a hatched or hollow
 mark. Error bars span the timed runs (min to max of the per-run ratio)."""
+
 from __future__ import annotations
 
 import base64
@@ -15,20 +16,36 @@ import matplotlib.ticker
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-plt.rcParams.update({"svg.fonttype": "path", "font.size": 9, "axes.titlesize": 10, "axes.grid": True,
-                     "grid.alpha": 0.3, "figure.dpi": 110, "savefig.bbox": "tight", "svg.hashsalt": "spacebvh"})
+plt.rcParams.update(
+    {
+        "svg.fonttype": "path",
+        "font.size": 9,
+        "axes.titlesize": 10,
+        "axes.grid": True,
+        "grid.alpha": 0.3,
+        "figure.dpi": 110,
+        "savefig.bbox": "tight",
+        "svg.hashsalt": "spacebvh",
+    }
+)
 
 BUILDER_COLOURS = {
-    "cbvh": "#1f77b4", "classical (cbvh)": "#1f77b4", "object (cbvh sweep)": "#1f77b4",
+    "cbvh": "#1f77b4",
+    "classical (cbvh)": "#1f77b4",
+    "object (cbvh sweep)": "#1f77b4",
     "binned": "#aec7e8",
-    "kdbvh": "#2ca02c", "spatial (kd planes)*": "#2ca02c",
+    "kdbvh": "#2ca02c",
+    "spatial (kd planes)*": "#2ca02c",
     "spatial": "#d62728",
     "sbvh": "#ff7f0e",
     "esc": "#8c564b",
     "evh": "#c49c94",
-    "full": "#9467bd", "full: object+spatial+grid*": "#9467bd",
-    "grid R=1": "#17becf", "grid, no splitting": "#17becf",
-    "grid R=2": "#0b6e78", "grid + splitting*": "#0b6e78",
+    "full": "#9467bd",
+    "full: object+spatial+grid*": "#9467bd",
+    "grid R=1": "#17becf",
+    "grid, no splitting": "#17becf",
+    "grid R=2": "#0b6e78",
+    "grid + splitting*": "#0b6e78",
     "cbvh@lookahead=1": "#e377c2",
     "cbvh@lookahead=2": "#7b2d6b",
     "spatial@trays=4096;tsplit=0;topt=4": "#ff9896",
@@ -55,7 +72,9 @@ def _save(fig, directory: Path, name: str) -> dict:
     paths = {}
     for ext in ("svg", "png"):
         path = directory / f"{name}.{ext}"
-        fig.savefig(path, format=ext, dpi=110 if ext == "png" else None, metadata={"Date": None} if ext == "svg" else None)
+        fig.savefig(
+            path, format=ext, dpi=110 if ext == "png" else None, metadata={"Date": None} if ext == "svg" else None
+        )
         paths[ext] = path
     plt.close(fig)
     return paths
@@ -69,9 +88,18 @@ def _grouped_bars(ax, scenes, series: dict, value, ylabel, title, baseline=1.0):
         triples = [value(e) for e in series[name]]
         xs = [j + (i - (len(names) - 1) / 2) * width for j in range(len(triples))]
         embree_kernel = "(Embree" in name  # Embree's own kernel: its tree's colour, hatched
-        ax.bar(xs, [t[0] for t in triples], width, yerr=_errors(triples), capsize=2, color=colour(name),
-               edgecolor="white" if embree_kernel else "black", linewidth=0.4, label=name,
-               hatch="///" if embree_kernel else None)
+        ax.bar(
+            xs,
+            [t[0] for t in triples],
+            width,
+            yerr=_errors(triples),
+            capsize=2,
+            color=colour(name),
+            edgecolor="white" if embree_kernel else "black",
+            linewidth=0.4,
+            label=name,
+            hatch="///" if embree_kernel else None,
+        )
     ax.axhline(baseline, color="black", linewidth=0.8, linestyle="--")
     ax.set_xticks(range(len(scenes)))
     ax.set_xticklabels([s.replace(" rotated ", "\nrotated ") for s in scenes], rotation=20, ha="right")
@@ -87,8 +115,15 @@ def fig_optimum(plot, out: Path) -> dict:
     for i, name in enumerate(spaces):
         data = [r if r else [float("nan")] for r in plot["ratios"][name]]
         positions = [j + (i - (len(spaces) - 1) / 2) * width for j in range(len(data))]
-        parts = ax.boxplot(data, positions=positions, widths=width * 0.9, patch_artist=True, whis=(0, 100),
-                           medianprops={"color": "black"}, manage_ticks=False)
+        parts = ax.boxplot(
+            data,
+            positions=positions,
+            widths=width * 0.9,
+            patch_artist=True,
+            whis=(0, 100),
+            medianprops={"color": "black"},
+            manage_ticks=False,
+        )
         for box in parts["boxes"]:
             box.set_facecolor(colour(name))
         ax.plot([], [], "s", color=colour(name), label=name)
@@ -108,10 +143,22 @@ def fig_optimum(plot, out: Path) -> dict:
 
 def fig_grid(plot, out: Path) -> dict:
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
-    _grouped_bars(a, plot["scenes"], plot["bars"], lambda e: e["speed"], "random-ray speed / classical BVH (ratio)",
-                  "Random rays, closest hit (BVH8 kernel)")
-    _grouped_bars(b, plot["scenes"], plot["bars"], lambda e: (e["sah_ratio"],) * 3, "tree SAH / classical BVH (ratio)",
-                  "SAH cost (lower is better)")
+    _grouped_bars(
+        a,
+        plot["scenes"],
+        plot["bars"],
+        lambda e: e["speed"],
+        "random-ray speed / classical BVH (ratio)",
+        "Random rays, closest hit (BVH8 kernel)",
+    )
+    _grouped_bars(
+        b,
+        plot["scenes"],
+        plot["bars"],
+        lambda e: (e["sah_ratio"],) * 3,
+        "tree SAH / classical BVH (ratio)",
+        "SAH cost (lower is better)",
+    )
     a.legend(fontsize=7)
     return _save(fig, out, "grid")
 
@@ -124,8 +171,16 @@ def fig_lookahead(plot, out: Path) -> dict:
             for p in points:
                 m = SCENE_MARKERS[scenes.index(p["scene"]) % len(SCENE_MARKERS)]
                 t = p[kind]
-                ax.errorbar([p["sah_ratio"]], [t[0]], yerr=_errors([t]), fmt=m, color=colour(label), capsize=2,
-                            markeredgecolor="black", markeredgewidth=0.4)
+                ax.errorbar(
+                    [p["sah_ratio"]],
+                    [t[0]],
+                    yerr=_errors([t]),
+                    fmt=m,
+                    color=colour(label),
+                    capsize=2,
+                    markeredgecolor="black",
+                    markeredgewidth=0.4,
+                )
         ax.axhline(1.0, color="black", linewidth=0.8, linestyle="--")
         ax.axvline(1.0, color="black", linewidth=0.8, linestyle="--")
         ax.set_xlabel("tree SAH / greedy cbvh (ratio; left = lower cost)")
@@ -141,10 +196,22 @@ def fig_lookahead(plot, out: Path) -> dict:
 
 def fig_search_spaces(plot, out: Path) -> dict:
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
-    _grouped_bars(a, plot["scenes"], plot["bars"], lambda e: e["random"], "speed / CBVH (ratio)",
-                  "Random rays (BVH8 single-ray kernel)")
-    _grouped_bars(b, plot["scenes"], plot["bars"], lambda e: e["primary"], "speed / CBVH (ratio)",
-                  "Primary rays, frustum traversal (8x8 packets)")
+    _grouped_bars(
+        a,
+        plot["scenes"],
+        plot["bars"],
+        lambda e: e["random"],
+        "speed / CBVH (ratio)",
+        "Random rays (BVH8 single-ray kernel)",
+    )
+    _grouped_bars(
+        b,
+        plot["scenes"],
+        plot["bars"],
+        lambda e: e["primary"],
+        "speed / CBVH (ratio)",
+        "Primary rays, frustum traversal (8x8 packets)",
+    )
     a.legend(fontsize=7)
     return _save(fig, out, "search_spaces")
 
@@ -152,8 +219,14 @@ def fig_search_spaces(plot, out: Path) -> dict:
 def fig_presplit(plot, out: Path) -> dict:
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), sharey=True)
     for ax, kind in zip(axes, ("random", "primary", "diffuse")):
-        _grouped_bars(ax, plot["scenes"], plot["bars"], lambda e, k=kind: e[k], "speed / cbvh (ratio)" if kind == "random" else "",
-                      f"{kind} rays, closest hit")
+        _grouped_bars(
+            ax,
+            plot["scenes"],
+            plot["bars"],
+            lambda e, k=kind: e[k],
+            "speed / cbvh (ratio)" if kind == "random" else "",
+            f"{kind} rays, closest hit",
+        )
     axes[0].legend(fontsize=7)
     return _save(fig, out, "presplit")
 
@@ -168,20 +241,43 @@ def _co_axis(values):
 def fig_overlap(plot, out: Path) -> dict:
     xs, lo, hi = _co_axis(plot["co"])
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5))
-    panels = [("sah", "tree SAH / SAH at C_o=0 (ratio)", True), ("epo", "EPO / EPO at C_o=0 (ratio)", True),
-              ("refs", "references / triangles", False), ("random", "random speed / C_o=0 (ratio)", False),
-              ("primary", "primary speed / C_o=0 (ratio)", False), ("diffuse", "diffuse speed / C_o=0 (ratio)", False)]
+    panels = [
+        ("sah", "tree SAH / SAH at C_o=0 (ratio)", True),
+        ("epo", "EPO / EPO at C_o=0 (ratio)", True),
+        ("refs", "references / triangles", False),
+        ("random", "random speed / C_o=0 (ratio)", False),
+        ("primary", "primary speed / C_o=0 (ratio)", False),
+        ("diffuse", "diffuse speed / C_o=0 (ratio)", False),
+    ]
     for ax, (key, ylabel, normalise) in zip(axes.flat, panels):
         for i, (scene, series) in enumerate(plot["scenes"].items()):
             values = series[key]
             m = SCENE_MARKERS[i % len(SCENE_MARKERS)]
             if key in ("random", "primary", "diffuse"):
-                ax.errorbar(xs, [t[0] for t in values], yerr=_errors(values), marker=m, color=colour("spatial"),
-                            alpha=0.85, capsize=2, label=scene, markeredgecolor="black", markeredgewidth=0.4)
+                ax.errorbar(
+                    xs,
+                    [t[0] for t in values],
+                    yerr=_errors(values),
+                    marker=m,
+                    color=colour("spatial"),
+                    alpha=0.85,
+                    capsize=2,
+                    label=scene,
+                    markeredgecolor="black",
+                    markeredgewidth=0.4,
+                )
             else:
                 ys = [v / values[0] for v in values] if normalise and values[0] else values
-                ax.plot(xs, ys, marker=m, color=colour("spatial"), alpha=0.85, label=scene,
-                        markeredgecolor="black", markeredgewidth=0.4)
+                ax.plot(
+                    xs,
+                    ys,
+                    marker=m,
+                    color=colour("spatial"),
+                    alpha=0.85,
+                    label=scene,
+                    markeredgecolor="black",
+                    markeredgewidth=0.4,
+                )
         ax.set_xscale("log")
         ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
         ax.set_xticks(xs)
@@ -230,23 +326,29 @@ def fig_build_quality(plot, out: Path) -> dict:
 def fig_termination(plot, out: Path) -> dict:
     """Rows: child boxes per closest-hit ray, per occlusion ray, then closest-hit and occlusion speed, all
     relative to spatial; columns: the ray kinds."""
-    panels = (("boxes", 0, "closest-hit boxes / spatial"), ("boxes", 1, "occlusion boxes / spatial"),
-              ("speed", "closest", "closest-hit speed / spatial"), ("speed", "occlusion", "occlusion speed / spatial"))
+    panels = (
+        ("boxes", 0, "closest-hit boxes / spatial"),
+        ("boxes", 1, "occlusion boxes / spatial"),
+        ("speed", "closest", "closest-hit speed / spatial"),
+        ("speed", "occlusion", "occlusion speed / spatial"),
+    )
     fig, axes = plt.subplots(len(panels), 3, figsize=(13, 13), sharex=True)
     for r, (quantity, which, ylabel) in enumerate(panels):
         for c, kind in enumerate(("random", "primary", "diffuse")):
-            if quantity == "boxes":
-                series = plot["boxes"]
-                value = (lambda e, k=kind, i=which: (e[k][i],) * 3)
-            else:
-                series = plot["speed"]
-                value = (lambda e, k=kind, m=which: e[k][m])
-            _grouped_bars(axes[r][c], plot["scenes"], series, value, ylabel if c == 0 else "",
-                          f"{kind} rays" if r == 0 else "")
+            series = plot["boxes" if quantity == "boxes" else "speed"]
+
+            def value(e, k=kind, w=which, boxes=quantity == "boxes"):
+                return (e[k][w],) * 3 if boxes else e[k][w]
+
+            _grouped_bars(
+                axes[r][c], plot["scenes"], series, value, ylabel if c == 0 else "", f"{kind} rays" if r == 0 else ""
+            )
     axes[0][0].legend(fontsize=7)
     axes[2][0].legend(fontsize=7)  # the speed rows add Embree's own kernel
-    fig.suptitle("Early ray termination: child boxes tested per ray (BVH8 kernel; lower is better) and speed "
-                 "(higher is better), relative to spatial")
+    fig.suptitle(
+        "Early ray termination: child boxes tested per ray (BVH8 kernel; lower is better) and speed "
+        "(higher is better), relative to spatial"
+    )
     return _save(fig, out, "termination")
 
 
@@ -257,9 +359,16 @@ def fig_scaling(plot, out: Path) -> dict:
         triples = [b for _, b in series]
         e = plot["exponents"].get(label)
         name = label.replace("(Embree kernel)", "(Embree's own build)")
-        ax.errorbar(ns, [t[0] for t in triples], yerr=_errors(triples), marker="o", color=colour(label), capsize=2,
-                    label=f"{name} (e = {e:.2f})" if e is not None else name,
-                    markerfacecolor="white" if label.endswith(")") else colour(label))
+        ax.errorbar(
+            ns,
+            [t[0] for t in triples],
+            yerr=_errors(triples),
+            marker="o",
+            color=colour(label),
+            capsize=2,
+            label=f"{name} (e = {e:.2f})" if e is not None else name,
+            markerfacecolor="white" if label.endswith(")") else colour(label),
+        )
     if plot["series"]:
         ns = sorted({n for s in plot["series"].values() for n, _ in s})
         first = next(iter(plot["series"].values()))
@@ -277,8 +386,12 @@ def fig_scaling(plot, out: Path) -> dict:
 def fig_heatmaps(plot, out: Path) -> dict:
     scenes = plot["scenes"]
     builders = list(scenes[0]["images"]) if scenes else []
-    fig, axes = plt.subplots(max(1, len(scenes)), max(1, len(builders)),
-                             figsize=(3.2 * max(1, len(builders)), 3.4 * max(1, len(scenes))), squeeze=False)
+    fig, axes = plt.subplots(
+        max(1, len(scenes)),
+        max(1, len(builders)),
+        figsize=(3.2 * max(1, len(builders)), 3.4 * max(1, len(scenes))),
+        squeeze=False,
+    )
     for r, scene in enumerate(scenes):
         for c, b in enumerate(builders):
             image = plt.imread(io.BytesIO(base64.b64decode(scene["images"][b])), format="png")
@@ -290,11 +403,22 @@ def fig_heatmaps(plot, out: Path) -> dict:
             ax.set_title(f"{b}: mean {scene['mean'][b]:.1f}", color=colour(b) if b != "embree-high" else "black")
             if c == 0:
                 ax.set_ylabel(f"{scene['label']}\n(colour scale 0 to {scene['scale']:.0f})")
-    fig.suptitle("Traversal work per pixel (nodes + triangles tested, binary kernel); one colour scale per row, "
-                 "set by cbvh's 99th percentile")
+    fig.suptitle(
+        "Traversal work per pixel (nodes + triangles tested, binary kernel); one colour scale per row, "
+        "set by cbvh's 99th percentile"
+    )
     return _save(fig, out, "heatmaps")
 
 
-FIGURES = {"optimum": fig_optimum, "grid": fig_grid, "lookahead": fig_lookahead, "search_spaces": fig_search_spaces,
-           "presplit": fig_presplit, "overlap": fig_overlap, "build_quality": fig_build_quality,
-           "termination": fig_termination, "scaling": fig_scaling, "heatmaps": fig_heatmaps}
+FIGURES = {
+    "optimum": fig_optimum,
+    "grid": fig_grid,
+    "lookahead": fig_lookahead,
+    "search_spaces": fig_search_spaces,
+    "presplit": fig_presplit,
+    "overlap": fig_overlap,
+    "build_quality": fig_build_quality,
+    "termination": fig_termination,
+    "scaling": fig_scaling,
+    "heatmaps": fig_heatmaps,
+}

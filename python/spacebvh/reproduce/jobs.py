@@ -6,6 +6,7 @@ This module imports only the standard library, so a Dask worker that lacks the p
 CLI's own JSON, and every speed figure from one `compare` invocation (its round-robin timing), so the
 ratios between rows stay honest whatever else the worker does between jobs.
 """
+
 from __future__ import annotations
 
 import base64
@@ -48,7 +49,9 @@ def find_cli(hint: str | None = None) -> str:
     here = Path(__file__).resolve()
     if len(here.parents) > 3 and (here.parents[3] / "build" / "spacebvh").is_file():  # a checkout's build
         return str(here.parents[3] / "build" / "spacebvh")
-    raise FileNotFoundError("spacebvh CLI not found: set SPACEBVH_CLI, put spacebvh on PATH, or build it (scripts/build.sh)")
+    raise FileNotFoundError(
+        "spacebvh CLI not found: set SPACEBVH_CLI, put spacebvh on PATH, or build it (scripts/build.sh)"
+    )
 
 
 def _run(cli: str, args: list[str], workdir: Path, record: dict) -> dict:
@@ -78,12 +81,29 @@ def _thread_args(spec: dict) -> list[str]:
 
 
 def _compare_args(params: dict) -> list[str]:
-    args = ["--builders", ",".join(params["builders"]),
-            "--embree", ",".join(params.get("embree", ["high"])) or "none",
-            "--embree-packets", ",".join(params.get("embree_packets", [])) or "none",
-            "--kernel", ",".join(params.get("kernels", ["auto"])),
-            "--random", str(params["random"]), "--width", str(params["width"]), "--height", str(params["height"]),
-            "--runs", str(params["runs"]), "--build-runs", str(params["build_runs"]), "--seed", "1", "--quiet"]
+    args = [
+        "--builders",
+        ",".join(params["builders"]),
+        "--embree",
+        ",".join(params.get("embree", ["high"])) or "none",
+        "--embree-packets",
+        ",".join(params.get("embree_packets", [])) or "none",
+        "--kernel",
+        ",".join(params.get("kernels", ["auto"])),
+        "--random",
+        str(params["random"]),
+        "--width",
+        str(params["width"]),
+        "--height",
+        str(params["height"]),
+        "--runs",
+        str(params["runs"]),
+        "--build-runs",
+        str(params["build_runs"]),
+        "--seed",
+        "1",
+        "--quiet",
+    ]
     if params.get("no_epo"):
         args.append("--no-epo")
     return args + list(params.get("extra", []))
@@ -91,13 +111,31 @@ def _compare_args(params: dict) -> list[str]:
 
 def _job_compare(spec, cli, workdir, record):
     params = spec["params"]
-    return [_run(cli, ["compare", *_scene_args(spec["scene"], workdir, camera=True), *_compare_args(params), *_thread_args(spec)], workdir, record)]
+    return [
+        _run(
+            cli,
+            ["compare", *_scene_args(spec["scene"], workdir, camera=True), *_compare_args(params), *_thread_args(spec)],
+            workdir,
+            record,
+        )
+    ]
 
 
 def _job_optimum(spec, cli, workdir, record):
     p = spec["params"]
-    args = ["optimum", *_scene_args(spec["scene"], workdir), "--nodes", str(p["nodes"]), "--min-refs", str(p["min_refs"]),
-            "--max-refs", str(p["max_refs"]), "--quiet", *p.get("extra", []), *_thread_args(spec)]
+    args = [
+        "optimum",
+        *_scene_args(spec["scene"], workdir),
+        "--nodes",
+        str(p["nodes"]),
+        "--min-refs",
+        str(p["min_refs"]),
+        "--max-refs",
+        str(p["max_refs"]),
+        "--quiet",
+        *p.get("extra", []),
+        *_thread_args(spec),
+    ]
     return [_run(cli, args, workdir, record)]
 
 
@@ -108,9 +146,25 @@ def _job_heatmap(spec, cli, workdir, record):
     outputs, scale = [], None
     for builder in p["builders"]:
         png = workdir / f"heat_{builder}.png"
-        args = ["render", *_scene_args(spec["scene"], workdir, camera=True), "--builder", builder, "--heatmap", "--kernel", p["kernel"],
-                "--quantity", p["quantity"], "--width", str(p["width"]), "--height", str(p["height"]),
-                "-o", png.name, "--quiet", *_thread_args(spec)]
+        args = [
+            "render",
+            *_scene_args(spec["scene"], workdir, camera=True),
+            "--builder",
+            builder,
+            "--heatmap",
+            "--kernel",
+            p["kernel"],
+            "--quantity",
+            p["quantity"],
+            "--width",
+            str(p["width"]),
+            "--height",
+            str(p["height"]),
+            "-o",
+            png.name,
+            "--quiet",
+            *_thread_args(spec),
+        ]
         if scale is not None:
             args += ["--scale-max", repr(scale)]
         out = _run(cli, args, workdir, record)
@@ -123,10 +177,11 @@ def _job_heatmap(spec, cli, workdir, record):
 
 # ---- growing subsets (build time against N) -------------------------------------------------------
 
+
 def _obj_faces(path: Path):
     """Vertex lines and triangles (1-based vertex indices, fan-triangulated, negative indices resolved)."""
     vertex_lines, triangles = [], []
-    with open(path, "r", errors="replace") as f:
+    with open(path, errors="replace") as f:
         for line in f:
             if line.startswith("v "):
                 vertex_lines.append(line if line.endswith("\n") else line + "\n")
@@ -156,7 +211,7 @@ def generated_scene(source: str):
     for j in range(size + 1):
         for i in range(size + 1):
             x, z = i / size, j / size
-            y = sum(h * max(0.0, 1 - ((x - bx) ** 2 + (z - bz) ** 2) / r ** 2) for bx, bz, r, h in bumps)
+            y = sum(h * max(0.0, 1 - ((x - bx) ** 2 + (z - bz) ** 2) / r**2) for bx, bz, r, h in bumps)
             vertex_lines.append(f"v {x:.6f} {y:.6f} {z:.6f}\n")
     triangles = []
     for j in range(size):
@@ -219,8 +274,13 @@ KINDS = {"compare": _job_compare, "optimum": _job_optimum, "heatmap": _job_heatm
 def run_job(spec: dict) -> dict:
     """Runs one job and returns its record: the exact commands, their JSON outputs and stdout, where and
     how long. Failures come back as a record with "error" so one bad scene does not sink a run."""
-    record = {"commands": [], "stdout": [], "host": socket.gethostname(), "platform": platform.platform(),
-              "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    record = {
+        "commands": [],
+        "stdout": [],
+        "host": socket.gethostname(),
+        "platform": platform.platform(),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
     start = time.perf_counter()
     try:
         cli = find_cli(spec.get("cli"))

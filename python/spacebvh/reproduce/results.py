@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Reading the CLI's JSON: compare rows by builder, ratios between rows of one run with their spread over
 the timed runs, and the deterministic part of a result (what two runs on different machines share)."""
+
 from __future__ import annotations
 
 import statistics
@@ -25,13 +26,20 @@ def rows_by_label(output: dict) -> dict[str, dict]:
 def wrong_total(output: dict, ours: bool = True) -> int:
     """Answers the exact arbiter rejected, over our rows (ours=True: 0 expected, exactness is the
     library's promise) or over Embree's own rows (float kernels, not exact)."""
-    return sum(row.get(kind, {}).get("wrong", 0) for scene in output["scenes"] for row in scene["rows"]
-               if ("sah" in row) == ours for kind in RAY_KINDS)
+    return sum(
+        row.get(kind, {}).get("wrong", 0)
+        for scene in output["scenes"]
+        for row in scene["rows"]
+        if ("sah" in row) == ours
+        for kind in RAY_KINDS
+    )
 
 
 def verified(output: dict) -> bool:
     """Whether the run checked answers (it does whenever an Embree row is present)."""
-    return any("wrong" in row.get(kind, {}) for scene in output["scenes"] for row in scene["rows"] for kind in RAY_KINDS)
+    return any(
+        "wrong" in row.get(kind, {}) for scene in output["scenes"] for row in scene["rows"] for kind in RAY_KINDS
+    )
 
 
 def speed_ratio(row: dict, base: dict, kind: str, which: str = "closest") -> tuple[float, float, float]:
@@ -53,9 +61,26 @@ def build_ms_spread(row: dict) -> tuple[float, float, float]:
 
 
 # Keys whose values depend on the machine or the moment, not on the inputs.
-TIMING_KEYS = {"build_ms", "build_ms_runs", "closest_mrays", "occlusion_mrays", "closest_ms_runs", "occlusion_ms_runs",
-               "peak_rss_bytes", "wall_s", "load_ms", "host", "platform", "started", "threads", "stdout", "commands",
-               "output", "png_base64", "allocated_bytes_per_triangle"}
+TIMING_KEYS = {
+    "build_ms",
+    "build_ms_runs",
+    "closest_mrays",
+    "occlusion_mrays",
+    "closest_ms_runs",
+    "occlusion_ms_runs",
+    "peak_rss_bytes",
+    "wall_s",
+    "load_ms",
+    "host",
+    "platform",
+    "started",
+    "threads",
+    "stdout",
+    "commands",
+    "output",
+    "png_base64",
+    "allocated_bytes_per_triangle",
+}
 
 
 def deterministic(value):

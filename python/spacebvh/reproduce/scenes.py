@@ -2,6 +2,7 @@
 """Scene specifications: a file, `builtin:NAME` or `generated:terrain:SIZE`, with load-time transforms
 written after '@' (`crytek_sponza.obj@rotate=x:45,y:45,z:45`, `scene.ply@scale=2;translate=0 0 1`),
 and their content hashes (the part of a job's key that says which triangles it saw)."""
+
 from __future__ import annotations
 
 import hashlib
@@ -22,9 +23,9 @@ QUICK_SCENES = ("builtin:interior", "builtin:interior-rotated", "generated:terra
 
 @dataclass(frozen=True)
 class Scene:
-    source: str                      # a path (absolute), builtin:NAME or generated:...
+    source: str  # a path (absolute), builtin:NAME or generated:...
     transforms: tuple = field(default=())  # ((key, value), ...) in the order given
-    manifest: str = ""               # the MANIFEST.md whose camera table gives a file's camera ("": none)
+    manifest: str = ""  # the MANIFEST.md whose camera table gives a file's camera ("": none)
 
     @property
     def flags(self) -> list[str]:
@@ -145,8 +146,10 @@ def default_full_scenes(root: Path | None, manifest: str | None) -> tuple[list[S
     """The shared scenes in `root` that are present and crytek_sponza rotated, with `manifest`'s cameras;
     notes for the missing ones."""
     if root is None:
-        return [], ["no shared scene folder (--scenes-dir, SPACEBVH_SCENES or ../shared/scenes beside the "
-                    "checkout): no shared scene was run (use --scenes or --quick)"]
+        return [], [
+            "no shared scene folder (--scenes-dir, SPACEBVH_SCENES or ../shared/scenes beside the "
+            "checkout): no shared scene was run (use --scenes or --quick)"
+        ]
     scenes, notes = [], []
     for name in SHARED_SCENES:
         path = root / name / f"{name}.obj"

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The result store: one JSON file per finished job, named by the job's key (a hash of everything that
 decides its result), so a rerun skips finished jobs and deleting one file reruns only that job."""
+
 from __future__ import annotations
 
 import hashlib

@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """What every experiment shares: the run profiles, the Experiment and Analysis types, and the helpers
 that read compare rows into table cells and verdicts."""
+
 from __future__ import annotations
 
 import math
@@ -13,26 +14,58 @@ from ..scenes import Scene
 # full: the shared scenes, about half an hour on 2 cores.
 # limit_X: the largest scene (triangles) experiment X runs on, so the run keeps to its time.
 PROFILES = {
-    "quick": {"random": 5000, "width": 32, "height": 32, "runs": 3, "build_runs": 3, "optimum_nodes": 40,
-              "optimum_max_refs": 12, "heat_size": 64, "limit_grid": 20000, "limit_full": 20000,
-              "limit_lookahead": 20000, "limit_build": 20000, "limit_overlap": 10**9, "skip_rotated_overlap": True,
-              "co_values": ("0", "1", "inf"), "scaling_strides": [1, 2, 4, 8], "scaling_build_runs": 3, "scaling_source": "generated:terrain:48"},
-    "full": {"random": 100000, "width": 256, "height": 256, "runs": 5, "build_runs": 3, "optimum_nodes": 200,
-             "optimum_max_refs": 16, "heat_size": 320, "limit_grid": 80000, "limit_full": 300000,
-             "limit_lookahead": 300000, "limit_build": 300000, "limit_overlap": 300000, "skip_rotated_overlap": False,
-             "co_values": ("0", "0.3", "1", "3", "inf"), "scaling_strides": [2, 4, 8, 16, 32], "scaling_build_runs": 2,
-             "scaling_source": None},
+    "quick": {
+        "random": 5000,
+        "width": 32,
+        "height": 32,
+        "runs": 3,
+        "build_runs": 3,
+        "optimum_nodes": 40,
+        "optimum_max_refs": 12,
+        "heat_size": 64,
+        "limit_grid": 20000,
+        "limit_full": 20000,
+        "limit_lookahead": 20000,
+        "limit_build": 20000,
+        "limit_overlap": 10**9,
+        "skip_rotated_overlap": True,
+        "co_values": ("0", "1", "inf"),
+        "scaling_strides": [1, 2, 4, 8],
+        "scaling_build_runs": 3,
+        "scaling_source": "generated:terrain:48",
+    },
+    "full": {
+        "random": 100000,
+        "width": 256,
+        "height": 256,
+        "runs": 5,
+        "build_runs": 3,
+        "optimum_nodes": 200,
+        "optimum_max_refs": 16,
+        "heat_size": 320,
+        "limit_grid": 80000,
+        "limit_full": 300000,
+        "limit_lookahead": 300000,
+        "limit_build": 300000,
+        "limit_overlap": 300000,
+        "skip_rotated_overlap": False,
+        "co_values": ("0", "0.3", "1", "3", "inf"),
+        "scaling_strides": [2, 4, 8, 16, 32],
+        "scaling_build_runs": 2,
+        "scaling_source": None,
+    },
 }
+
 
 @dataclass
 class Analysis:
     table_columns: list
     table_rows: list
-    verdict: str            # "confirmed", "partly confirmed", "not confirmed", "no data"
-    summary: str            # our numbers, one or two sentences
+    verdict: str  # "confirmed", "partly confirmed", "not confirmed", "no data"
+    summary: str  # our numbers, one or two sentences
     plot: dict = field(default_factory=dict)  # what the figure draws
-    wrong: int = 0          # our rows' wrong answers over the experiment's runs (0 expected)
-    embree_wrong: int = 0   # Embree's own kernel's (not exact; reported, not a failure)
+    wrong: int = 0  # our rows' wrong answers over the experiment's runs (0 expected)
+    embree_wrong: int = 0  # Embree's own kernel's (not exact; reported, not a failure)
     verified_runs: int = 0
     notes: list = field(default_factory=list)
 
@@ -41,12 +74,12 @@ class Analysis:
 class Experiment:
     id: str
     title: str
-    claim: str              # the slide's claim, in its words where it has any
-    slide: str              # which slide
-    kind: str               # job kind (jobs.KINDS)
-    method: str             # what we run, for the report
+    claim: str  # the slide's claim, in its words where it has any
+    slide: str  # which slide
+    kind: str  # job kind (jobs.KINDS)
+    method: str  # what we run, for the report
 
-    limit = ""              # PROFILES key of the largest scene it runs on (a class attribute, not a field)
+    limit = ""  # PROFILES key of the largest scene it runs on (a class attribute, not a field)
     limit_reason = "its builds would not fit the run's time"
 
     def select(self, scenes: list[Scene], triangles: dict, profile: str) -> tuple[list[Scene], list[str]]:
@@ -54,8 +87,12 @@ class Experiment:
             return scenes, []
         limit = PROFILES[profile][self.limit]
         kept = [s for s in scenes if triangles[s] <= limit]
-        return kept, [f"{s.label} ({triangles[s]} triangles) not run: this experiment is limited to {limit} "
-                      f"triangles in the {profile} run ({self.limit_reason})" for s in scenes if s not in kept]
+        return kept, [
+            f"{s.label} ({triangles[s]} triangles) not run: this experiment is limited to {limit} "
+            f"triangles in the {profile} run ({self.limit_reason})"
+            for s in scenes
+            if s not in kept
+        ]
 
     def params(self, scene: Scene, triangles: int, profile: str) -> dict:
         raise NotImplementedError
@@ -68,12 +105,31 @@ class Experiment:
         raise NotImplementedError
 
 
-def compare_params(profile: str, builders, *, build_runs: int = 1, embree=("high",), embree_packets=(),
-                    kernels=("auto",), extra=(), no_epo=False) -> dict:
+def compare_params(
+    profile: str,
+    builders,
+    *,
+    build_runs: int = 1,
+    embree=("high",),
+    embree_packets=(),
+    kernels=("auto",),
+    extra=(),
+    no_epo=False,
+) -> dict:
     p = PROFILES[profile]
-    return {"builders": list(builders), "embree": list(embree), "embree_packets": list(embree_packets),
-            "kernels": list(kernels), "random": p["random"], "width": p["width"], "height": p["height"],
-            "runs": p["runs"], "build_runs": build_runs, "extra": list(extra), "no_epo": no_epo}
+    return {
+        "builders": list(builders),
+        "embree": list(embree),
+        "embree_packets": list(embree_packets),
+        "kernels": list(kernels),
+        "random": p["random"],
+        "width": p["width"],
+        "height": p["height"],
+        "runs": p["runs"],
+        "build_runs": build_runs,
+        "extra": list(extra),
+        "no_epo": no_epo,
+    }
 
 
 def fmt(x: float, digits: int = 2) -> str:

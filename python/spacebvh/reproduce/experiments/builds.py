@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
 """Build cost: build time against tree quality for every builder and Embree, and build time against N."""
+
 from __future__ import annotations
 
 import math
@@ -17,8 +18,13 @@ class BuildQuality(Experiment):
 
     def params(self, scene, triangles, profile):
         ours = [b for b in self.OURS if b != "full" or triangles <= PROFILES[profile]["limit_grid"]]
-        return compare_params(profile, ours + list(self.EMBREE_TREES), build_runs=PROFILES[profile]["build_runs"],
-                               embree=("low", "medium", "high"), no_epo=True)
+        return compare_params(
+            profile,
+            ours + list(self.EMBREE_TREES),
+            build_runs=PROFILES[profile]["build_runs"],
+            embree=("low", "medium", "high"),
+            no_epo=True,
+        )
 
     def weight(self, scene, triangles, profile):
         return 1.0 + triangles / 2500.0
@@ -32,26 +38,63 @@ class BuildQuality(Experiment):
             for label, row in by.items():
                 build = build_ms_spread(row)
                 speed = speed_ratio(row, base, "random")
-                point = {"scene": scene.label, "build_ms": build, "build_rel": build[0] / build_ms_spread(reference)[0],
-                         "sah_ratio": row["sah"] / base["sah"] if "sah" in row else None, "speed": speed}
+                point = {
+                    "scene": scene.label,
+                    "build_ms": build,
+                    "build_rel": build[0] / build_ms_spread(reference)[0],
+                    "sah_ratio": row["sah"] / base["sah"] if "sah" in row else None,
+                    "speed": speed,
+                }
                 plot["points"].setdefault(label, []).append(point)
-                rows.append([scene.label, label, f"{build[0]:.1f} ({build[1]:.1f}-{build[2]:.1f})",
-                             fmt(point["build_rel"]), fmt(row.get("sah")), fmt(point["sah_ratio"], 3),
-                             ratio_text(speed), row_wrong(row)])
+                rows.append(
+                    [
+                        scene.label,
+                        label,
+                        f"{build[0]:.1f} ({build[1]:.1f}-{build[2]:.1f})",
+                        fmt(point["build_rel"]),
+                        fmt(row.get("sah")),
+                        fmt(point["sah_ratio"], 3),
+                        ratio_text(speed),
+                        row_wrong(row),
+                    ]
+                )
             s, e = by["spatial"], by["embree-high"]
             best_sah = min(r["sah"] for r in by.values() if "sah" in r)
-            spatial_vs.append((scene.label, build_ms_spread(s)[0] / build_ms_spread(reference)[0], s["sah"] / e["sah"],
-                               speed_ratio(s, reference, "random")[0], s["sah"] / best_sah))
+            spatial_vs.append(
+                (
+                    scene.label,
+                    build_ms_spread(s)[0] / build_ms_spread(reference)[0],
+                    s["sah"] / e["sah"],
+                    speed_ratio(s, reference, "random")[0],
+                    s["sah"] / best_sah,
+                )
+            )
         # "Fast with near optimal results": within 2 % of the lowest SAH any builder reached, built in at most
         # 3x the time of Embree HIGH (the fastest high-quality builder we know).
         flags = [near <= 1.02 and build <= 3.0 for _, build, _, _, near in spatial_vs]
-        summary = ("spatial per scene: build time / Embree HIGH's build; SAH / SAH of Embree HIGH's tree; SAH / the "
-                   "lowest SAH of any builder; random-ray speed (our BVH8 kernel) / Embree's own kernel: "
-                   + "; ".join(f"{n}: {b:.2f}x, {q:.3f}, {near:.3f}, {v:.2f}x" for n, b, q, v, near in spatial_vs)
-                   + ". Confirmed for a scene when spatial's SAH is within 2 % of the lowest and its build within 3x "
-                   "Embree HIGH's.")
-        return Analysis(["scene", "builder", "build ms median (min-max)", "build / Embree HIGH", "SAH", "SAH / cbvh",
-                         "random speed / cbvh", "wrong"], rows, majority(flags), summary, plot)
+        summary = (
+            "spatial per scene: build time / Embree HIGH's build; SAH / SAH of Embree HIGH's tree; SAH / the "
+            "lowest SAH of any builder; random-ray speed (our BVH8 kernel) / Embree's own kernel: "
+            + "; ".join(f"{n}: {b:.2f}x, {q:.3f}, {near:.3f}, {v:.2f}x" for n, b, q, v, near in spatial_vs)
+            + ". Confirmed for a scene when spatial's SAH is within 2 % of the lowest and its build within 3x "
+            "Embree HIGH's."
+        )
+        return Analysis(
+            [
+                "scene",
+                "builder",
+                "build ms median (min-max)",
+                "build / Embree HIGH",
+                "SAH",
+                "SAH / cbvh",
+                "random speed / cbvh",
+                "wrong",
+            ],
+            rows,
+            majority(flags),
+            summary,
+            plot,
+        )
 
 
 class Scaling(Experiment):
@@ -67,8 +110,9 @@ class Scaling(Experiment):
         return chosen, ([] if chosen else ["no untransformed scene file to take subsets of"])
 
     def params(self, scene, triangles, profile):
-        p = compare_params(profile, self.BUILDERS, build_runs=PROFILES[profile]["scaling_build_runs"], embree=("high",),
-                            no_epo=True)
+        p = compare_params(
+            profile, self.BUILDERS, build_runs=PROFILES[profile]["scaling_build_runs"], embree=("high",), no_epo=True
+        )
         p.update(random=1000, width=16, height=16, runs=1, strides=PROFILES[profile]["scaling_strides"])
         return p
 
@@ -101,9 +145,16 @@ class Scaling(Experiment):
         if not exponents:
             return Analysis([], [], "no data", "no job finished", plot)
         grid = exponents.get("full")
-        summary = ("Fitted exponent e of build time ~ N^e over the subsets: "
-                   + ", ".join(f"{k} {v:.2f}" for k, v in exponents.items())
-                   + ". The slides' bound is O(N^1.5) for the grid search (our `full`).")
+        summary = (
+            "Fitted exponent e of build time ~ N^e over the subsets: "
+            + ", ".join(f"{k} {v:.2f}" for k, v in exponents.items())
+            + ". The slides' bound is O(N^1.5) for the grid search (our `full`)."
+        )
         verdict = "no data" if grid is None else "confirmed" if grid <= 1.5 else "not confirmed"
-        return Analysis(["scene", "builder", "triangles", "build ms (median)", "min-max", "fitted exponent"], rows,
-                        verdict, summary, plot)
+        return Analysis(
+            ["scene", "builder", "triangles", "build ms (median)", "min-max", "fitted exponent"],
+            rows,
+            verdict,
+            summary,
+            plot,
+        )
