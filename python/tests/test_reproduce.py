@@ -2,6 +2,7 @@
 """`python -m spacebvh.reproduce --quick` end to end: every experiment's figure, table and JSON; the store
 (rerun runs nothing, removing one result reruns that job only); a real Dask scheduler with two worker
 processes gives the local run's results (all but timings); the HTML in headless Chromium."""
+
 from __future__ import annotations
 
 import importlib.util
@@ -24,7 +25,8 @@ PYTHON_DIR = Path(__file__).resolve().parents[1]
 # An installed package (pip install .) is used as it is; a checkout's python/ only when none has reproduce.
 _installed = importlib.util.find_spec("spacebvh")
 ON_PATH = _installed is not None and any(
-    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or []))
+    (Path(p) / "reproduce").is_dir() for p in (_installed.submodule_search_locations or [])
+)
 if not ON_PATH:
     sys.path.insert(0, str(PYTHON_DIR))
 
@@ -48,8 +50,13 @@ def _env():
 
 
 def reproduce(*args, timeout=900):
-    completed = subprocess.run([sys.executable, "-m", "spacebvh.reproduce", "--quick", "--no-progress", *map(str, args)],
-                               capture_output=True, text=True, env=_env(), timeout=timeout)
+    completed = subprocess.run(
+        [sys.executable, "-m", "spacebvh.reproduce", "--quick", "--no-progress", *map(str, args)],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        timeout=timeout,
+    )
     assert completed.returncode == 0, completed.stderr[-4000:]
     return completed
 
@@ -67,8 +74,11 @@ def local_run(tmp_path_factory) -> Path:
 
 def job_files(out: Path) -> dict[str, Path]:
     """The stored job results (the store's scene_info/ cache of scene facts is not a job)."""
-    return {p.relative_to(out / "jobs").as_posix(): p for p in (out / "jobs").glob("*/*.json")
-            if p.parent.name != "scene_info"}
+    return {
+        p.relative_to(out / "jobs").as_posix(): p
+        for p in (out / "jobs").glob("*/*.json")
+        if p.parent.name != "scene_info"
+    }
 
 
 def test_every_experiment_has_figure_table_and_json(local_run):
@@ -76,19 +86,25 @@ def test_every_experiment_has_figure_table_and_json(local_run):
     assert log["jobs_failed"] == []
     assert len(log["jobs_run"]) == log["jobs_total"] > 0
     for experiment in EXPERIMENTS:
-        for path in (f"figures/{experiment.id}.svg", f"figures/{experiment.id}.png", f"tables/{experiment.id}.csv",
-                     f"results/{experiment.id}.json"):
+        for path in (
+            f"figures/{experiment.id}.svg",
+            f"figures/{experiment.id}.png",
+            f"tables/{experiment.id}.csv",
+            f"results/{experiment.id}.json",
+        ):
             assert (local_run / path).stat().st_size > 0, path
         result = json.loads((local_run / "results" / f"{experiment.id}.json").read_text())
         assert result["table"]["rows"], experiment.id
         assert result["verdict"] in ("confirmed", "partly confirmed", "not confirmed"), experiment.id
         assert result["claim"] and result["summary"]
         assert result["wrong_answers"] == 0, experiment.id
-        assert result["jobs"] and all((local_run / j).is_file() for j in result["jobs"])
+        assert result["jobs"] and all((local_run / "jobs" / j).is_file() for j in result["jobs"])
     env = json.loads((local_run / "environment.json").read_text())
     assert env["machine"]["cores"] and env["library_version"] and "--quick" in env["command"]
     html = (local_run / "index.html").read_text()
     assert "http://" not in html and "https://" not in html  # nothing to fetch: opens from the file system
+    assert 'href="jobs/' not in html  # the store is not part of the report: nothing links into it
+    assert env["store"] == "jobs"
     for experiment in EXPERIMENTS:
         assert f'src="figures/{experiment.id}.svg"' in html
 
@@ -151,8 +167,19 @@ def test_a_dask_cluster_gives_the_local_results(local_run, tmp_path):
                 assert time.time() < deadline and processes[0].poll() is None, "dask scheduler did not start"
                 time.sleep(0.3)
         for _ in range(2):
-            processes.append(_dask("worker", address, "--nthreads", "1", "--host", "127.0.0.1",
-                                   "--dashboard-address", ":0", "--no-nanny"))
+            processes.append(
+                _dask(
+                    "worker",
+                    address,
+                    "--nthreads",
+                    "1",
+                    "--host",
+                    "127.0.0.1",
+                    "--dashboard-address",
+                    ":0",
+                    "--no-nanny",
+                )
+            )
         from distributed import Client
 
         with Client(address, timeout=60) as client:
@@ -181,6 +208,7 @@ def test_a_dask_cluster_gives_the_local_results(local_run, tmp_path):
 
 # ---- the report in headless Chromium, through the DevTools protocol over a pipe (no extra package) ----
 
+
 class DevTools:
     """Chromium with --remote-debugging-pipe: commands go to its fd 3, replies and events come from its fd 4,
     each a JSON message ended by a NUL byte."""
@@ -199,9 +227,22 @@ class DevTools:
             os.set_inheritable(4, True)
 
         self.process = subprocess.Popen(
-            [browser, "--headless=new", "--no-sandbox", "--disable-gpu", "--remote-debugging-pipe", "--no-first-run",
-             "--no-default-browser-check", f"--user-data-dir={profile}", "about:blank"],
-            preexec_fn=fds, close_fds=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            [
+                browser,
+                "--headless=new",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--remote-debugging-pipe",
+                "--no-first-run",
+                "--no-default-browser-check",
+                f"--user-data-dir={profile}",
+                "about:blank",
+            ],
+            preexec_fn=fds,
+            close_fds=False,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         os.close(to_chrome_r)
         os.close(from_chrome_w)
         self.events, self.replies, self._next = [], {}, 0
@@ -262,15 +303,23 @@ def test_report_loads_in_headless_chromium(local_run, tmp_path):
         session = chrome.send("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
         for domain in ("Runtime", "Log", "Page", "Network"):
             chrome.send(f"{domain}.enable", session=session)
-        chrome.send("Emulation.setDeviceMetricsOverride",
-                    {"width": 1280, "height": 1600, "deviceScaleFactor": 1, "mobile": False}, session=session)
+        chrome.send(
+            "Emulation.setDeviceMetricsOverride",
+            {"width": 1280, "height": 1600, "deviceScaleFactor": 1, "mobile": False},
+            session=session,
+        )
         chrome.send("Page.navigate", {"url": (local_run / "index.html").as_uri()}, session=session)
         chrome.wait_event("Page.loadEventFired")
         time.sleep(0.5)  # late console messages
-        broken = chrome.send("Runtime.evaluate", {
-            "expression": "JSON.stringify([document.images.length, Array.from(document.images)"
-                          ".filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)])",
-            "returnByValue": True}, session=session)["result"]["value"]
+        broken = chrome.send(
+            "Runtime.evaluate",
+            {
+                "expression": "JSON.stringify([document.images.length, Array.from(document.images)"
+                ".filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src)])",
+                "returnByValue": True,
+            },
+            session=session,
+        )["result"]["value"]
         count, missing = json.loads(broken)
         shot = chrome.send("Page.captureScreenshot", {"format": "png"}, session=session)["data"]
     finally:
@@ -281,11 +330,14 @@ def test_report_loads_in_headless_chromium(local_run, tmp_path):
     screenshot.write_bytes(base64.b64decode(shot))
     assert screenshot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and screenshot.stat().st_size > 10000
     assert count >= len(EXPERIMENTS) and missing == []
-    errors = [e for e in chrome.events
-              if (e["method"] == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert"))
-              or e["method"] == "Runtime.exceptionThrown"
-              or (e["method"] == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")
-              or e["method"] == "Network.loadingFailed"]
+    errors = [
+        e
+        for e in chrome.events
+        if (e["method"] == "Runtime.consoleAPICalled" and e["params"]["type"] in ("error", "assert"))
+        or e["method"] == "Runtime.exceptionThrown"
+        or (e["method"] == "Log.entryAdded" and e["params"]["entry"]["level"] == "error")
+        or e["method"] == "Network.loadingFailed"
+    ]
     assert errors == []
     requested = [e["params"]["request"]["url"] for e in chrome.events if e["method"] == "Network.requestWillBeSent"]
     assert requested and all(url.startswith(("file:", "data:")) for url in requested), requested

@@ -2,6 +2,7 @@
 """`python -m spacebvh.reproduce`: runs the paper's experiments as independent Dask jobs (one scene and
 one experiment each, measured whole on one worker), keeps each job's result in a store keyed by its
 inputs, and writes the report."""
+
 from __future__ import annotations
 
 import argparse
@@ -19,7 +20,15 @@ from pathlib import Path
 
 from . import jobs as jobs_module
 from .experiments import BY_ID, EXPERIMENTS, PROFILES, count_wrong
-from .scenes import QUICK_SCENES, Scene, content_hash, default_full_scenes, parse_scene, scene_manifest, shared_scenes_dir
+from .scenes import (
+    QUICK_SCENES,
+    Scene,
+    content_hash,
+    default_full_scenes,
+    parse_scene,
+    scene_manifest,
+    shared_scenes_dir,
+)
 from .store import Store, job_key
 
 # Part of every job's key: bump when a job's meaning changes (what it runs or how it reads the CLI).
@@ -31,30 +40,57 @@ def parse_args(argv=None):
     parser = argparse.ArgumentParser(
         prog="spacebvh-reproduce",
         description="Run the experiments of Popov et al. 2009 (slides in ../shared/seed) with spacebvh as Dask jobs "
-                    "and write a self-contained HTML report with figures, tables and raw JSON.")
-    parser.add_argument("--quick", action="store_true",
-                        help="a reduced run on the built-in scenes (a few minutes on 2 cores)")
-    parser.add_argument("--scenes", nargs="+", metavar="SCENE",
-                        help="scene files or builtin:NAME, each optionally with @rotate=x:45,y:45,z:45;scale=S;"
-                             "translate=X Y Z (default: the shared scenes of --scenes-dir and crytek_sponza rotated "
-                             "45/45/45)")
-    parser.add_argument("--scenes-dir", type=Path, metavar="DIR",
-                        help="the shared scene folder of the default scenes (default: $SPACEBVH_SCENES, else "
-                             "../shared/scenes beside the checkout)")
-    parser.add_argument("--manifest", type=Path, metavar="FILE",
-                        help="the scene collection's MANIFEST.md, whose camera table gives a scene file's camera "
-                             "(default: $SPACEBVH_SCENE_MANIFEST, else MANIFEST.md in the default scenes' folder)")
-    parser.add_argument("--experiments", default=",".join(e.id for e in EXPERIMENTS),
-                        help="comma-separated experiments (default: all): " + ", ".join(e.id for e in EXPERIMENTS))
+        "and write a self-contained HTML report with figures, tables and raw JSON.",
+    )
+    parser.add_argument(
+        "--quick", action="store_true", help="a reduced run on the built-in scenes (a few minutes on 2 cores)"
+    )
+    parser.add_argument(
+        "--scenes",
+        nargs="+",
+        metavar="SCENE",
+        help="scene files or builtin:NAME, each optionally with @rotate=x:45,y:45,z:45;scale=S;"
+        "translate=X Y Z (default: the shared scenes of --scenes-dir and crytek_sponza rotated "
+        "45/45/45)",
+    )
+    parser.add_argument(
+        "--scenes-dir",
+        type=Path,
+        metavar="DIR",
+        help="the shared scene folder of the default scenes (default: $SPACEBVH_SCENES, else "
+        "../shared/scenes beside the checkout)",
+    )
+    parser.add_argument(
+        "--manifest",
+        type=Path,
+        metavar="FILE",
+        help="the scene collection's MANIFEST.md, whose camera table gives a scene file's camera "
+        "(default: $SPACEBVH_SCENE_MANIFEST, else MANIFEST.md in the default scenes' folder)",
+    )
+    parser.add_argument(
+        "--experiments",
+        default=",".join(e.id for e in EXPERIMENTS),
+        help="comma-separated experiments (default: all): " + ", ".join(e.id for e in EXPERIMENTS),
+    )
     parser.add_argument("--out", default="reproduce-report", type=Path, help="report directory (default: %(default)s)")
-    parser.add_argument("--store", type=Path, help="result store (default: OUT/jobs)")
-    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                        help="send the jobs to this running Dask scheduler (default: an in-process cluster with one "
-                             "worker, one job at a time, so timings are undisturbed)")
-    parser.add_argument("--threads", type=int, default=0,
-                        help="threads each job's spacebvh uses (default 0: all cores of its worker)")
-    parser.add_argument("--library-version",
-                        help="what identifies the library in job keys (default: sha256 of the spacebvh executable)")
+    parser.add_argument(
+        "--store",
+        type=Path,
+        help="result store, one JSON file per job: what reruns skip and --report-only reads; the "
+        "report names its files but does not link them (default: OUT/jobs)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="send the jobs to this running Dask scheduler (default: an in-process cluster with one "
+        "worker, one job at a time, so timings are undisturbed)",
+    )
+    parser.add_argument(
+        "--threads", type=int, default=0, help="threads each job's spacebvh uses (default 0: all cores of its worker)"
+    )
+    parser.add_argument(
+        "--library-version", help="what identifies the library in job keys (default: sha256 of the spacebvh executable)"
+    )
     half = parser.add_mutually_exclusive_group()
     half.add_argument("--jobs-only", action="store_true", help="run the missing jobs, write no report")
     half.add_argument("--report-only", action="store_true", help="write the report from the store, run no job")
@@ -77,8 +113,9 @@ def library_version(cli: str, override: str | None) -> str:
 
 def git_revision() -> str:
     try:
-        rev = subprocess.run(["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True,
-                             text=True, timeout=10).stdout.strip()
+        rev = subprocess.run(
+            ["git", "-C", str(REPO), "describe", "--always", "--dirty"], capture_output=True, text=True, timeout=10
+        ).stdout.strip()
         return rev or "-"
     except (OSError, subprocess.SubprocessError):
         return "-"
@@ -97,8 +134,13 @@ def machine() -> dict:
                 memory = int(line.split()[1]) / 2**20
     except OSError:
         pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "memory_gib": memory, "platform": platform.platform(),
-            "host": platform.node()}
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "memory_gib": memory,
+        "platform": platform.platform(),
+        "host": platform.node(),
+    }
 
 
 def versions() -> dict:
@@ -128,15 +170,28 @@ def triangle_count(cli: str, scene: Scene, store: Store, scene_hash: str) -> int
 
 
 class Job:
-    def __init__(self, experiment, scene: Scene, scene_hash: str, params: dict, lib: str, threads: int, cli: str,
-                 weight: float):
+    def __init__(
+        self, experiment, scene: Scene, scene_hash: str, params: dict, lib: str, threads: int, cli: str, weight: float
+    ):
         self.experiment, self.scene, self.weight = experiment, scene, weight
-        self.inputs = {"experiment": experiment.id, "kind": experiment.kind, "job_version": JOB_VERSION,
-                       "scene_hash": scene_hash, "scene_flags": scene.flags, "params": params,
-                       "library_version": lib, "threads": threads or None}
+        self.inputs = {
+            "experiment": experiment.id,
+            "kind": experiment.kind,
+            "job_version": JOB_VERSION,
+            "scene_hash": scene_hash,
+            "scene_flags": scene.flags,
+            "params": params,
+            "library_version": lib,
+            "threads": threads or None,
+        }
         self.key = job_key(self.inputs)
-        self.spec = {"kind": experiment.kind, "scene": scene.to_json(), "params": params, "threads": threads or None,
-                     "cli": cli}
+        self.spec = {
+            "kind": experiment.kind,
+            "scene": scene.to_json(),
+            "params": params,
+            "threads": threads or None,
+            "cli": cli,
+        }
         self.name = f"{experiment.id}/{scene.slug}"
 
 
@@ -165,8 +220,18 @@ def plan(args, cli: str, lib: str, store: Store):
                 hashes[scene] = content_hash(scene, lib)
                 triangles[scene] = triangle_count(cli, scene, store, hashes[scene])
             n = triangles[scene]
-            planned.append(Job(experiment, scene, hashes[scene], experiment.params(scene, n, profile), lib,
-                               args.threads, cli, experiment.weight(scene, n, profile)))
+            planned.append(
+                Job(
+                    experiment,
+                    scene,
+                    hashes[scene],
+                    experiment.params(scene, n, profile),
+                    lib,
+                    args.threads,
+                    cli,
+                    experiment.weight(scene, n, profile),
+                )
+            )
     return profile, scenes, hashes, triangles, planned, skipped, notes
 
 
@@ -212,11 +277,17 @@ def _dispatch(client, cluster, run_job, pending, store, progress):
     try:
         futures = {}
         for job in pending:
-            future = client.submit(run_job, job.spec, key=f"reproduce-{job.name}-{job.key[:16]}-{time.time_ns()}",
-                                   pure=False)
+            future = client.submit(
+                run_job, job.spec, key=f"reproduce-{job.name}-{job.key[:16]}-{time.time_ns()}", pure=False
+            )
             futures[future] = job
-        bar = tqdm(total=round(sum(j.weight for j in pending), 1), unit="work", disable=not progress,
-                   bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} [{elapsed}<{remaining}] {postfix}", file=sys.stderr)
+        bar = tqdm(
+            total=round(sum(j.weight for j in pending), 1),
+            unit="work",
+            disable=not progress,
+            bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} [{elapsed}<{remaining}] {postfix}",
+            file=sys.stderr,
+        )
         for future in as_completed(futures):
             job = futures[future]
             try:
@@ -270,22 +341,40 @@ def main(argv=None) -> int:
 
     cached = [j for j in planned if store.load(j.experiment.id, j.scene.slug, j.key) is not None]
     pending = [j for j in planned if j not in cached]
-    print(f"spacebvh-reproduce: {len(planned)} jobs, {len(cached)} in the store, {len(pending)} to run"
-          + (" (--report-only: none run)" if args.report_only else ""), file=sys.stderr)
+    print(
+        f"spacebvh-reproduce: {len(planned)} jobs, {len(cached)} in the store, {len(pending)} to run"
+        + (" (--report-only: none run)" if args.report_only else ""),
+        file=sys.stderr,
+    )
     done, failed = ([], []) if args.report_only else run_jobs(pending, store, args.scheduler, not args.no_progress)
 
-    command = "python -m spacebvh.reproduce " + " ".join(shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:]))
+    command = "python -m spacebvh.reproduce " + " ".join(
+        shlex.quote(a) for a in (argv if argv is not None else sys.argv[1:])
+    )
     if done:  # the runs that produced the store's results, for the report (a --report-only run adds none)
         history = store.root / "runs.json"
         runs = json.loads(history.read_text()) if history.is_file() else []
-        runs.append({"command": command, "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "jobs_run": len(done),
-                     "jobs_failed": len(failed), "wall_s": round(time.perf_counter() - start, 1),
-                     "host": platform.node(), "scheduler": args.scheduler or "local"})
+        runs.append(
+            {
+                "command": command,
+                "date": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
+                "jobs_run": len(done),
+                "jobs_failed": len(failed),
+                "wall_s": round(time.perf_counter() - start, 1),
+                "host": platform.node(),
+                "scheduler": args.scheduler or "local",
+            }
+        )
         store.root.mkdir(parents=True, exist_ok=True)
         history.write_text(json.dumps(runs, indent=1))
     out.mkdir(parents=True, exist_ok=True)
-    run_log = {"jobs_total": len(planned), "jobs_cached": [j.name for j in cached], "jobs_run": done,
-               "jobs_failed": failed, "wall_s": round(time.perf_counter() - start, 1)}
+    run_log = {
+        "jobs_total": len(planned),
+        "jobs_cached": [j.name for j in cached],
+        "jobs_run": done,
+        "jobs_failed": failed,
+        "wall_s": round(time.perf_counter() - start, 1),
+    }
     if args.jobs_only:
         (out / "run.json").write_text(json.dumps(run_log, indent=1))
         return 1 if failed else 0
@@ -309,26 +398,51 @@ def main(argv=None) -> int:
 
             analysis = Analysis([], [], "no data", "no job of this experiment has a result in the store")
         analysis.wrong, analysis.embree_wrong, analysis.verified_runs = count_wrong([(s, r) for s, r, _ in found])
-        job_notes = list(skipped.get(experiment.id, [])) + [f"{m}: no result in the store (job missing or failed)"
-                                                             for m in missing]
+        job_notes = list(skipped.get(experiment.id, [])) + [
+            f"{m}: no result in the store (job missing or failed)" for m in missing
+        ]
         entries.append((experiment, analysis, found, job_notes))
 
     spread = timing_spread([r for _, _, found, _ in entries for _, r, _ in found])
     hosts = sorted({r["host"] for _, a, found, _ in entries for _, r, _ in found})
-    environment = {"command": command, "profile": profile, "library_version": lib, "git": git_revision(),
-                   "cli": cli, "machine": machine(), "job_hosts": hosts, "versions": versions(),
-                   "scheduler": args.scheduler or "in-process LocalCluster, 1 worker, 1 thread",
-                   "threads_per_job": args.threads or "all cores of the worker", "profile_settings": PROFILES[profile],
-                   "scenes": [{"label": s.label, "source": s.source, "flags": s.flags, "manifest": s.manifest or None,
-                               "sha256": hashes[s],
-                               "triangles": triangles[s]} for s in scenes],
-                   "jobs_total": len(planned), "jobs_run": len(done), "jobs_cached": len(cached),
-                   "jobs_failed": failed, "notes": notes,
-                   "job_runs": json.loads((store.root / "runs.json").read_text()) if (store.root / "runs.json").is_file() else [],
-                   "timing_spread": spread, "wall_s": time.perf_counter() - start}
+    environment = {
+        "command": command,
+        "profile": profile,
+        "library_version": lib,
+        "git": git_revision(),
+        "cli": cli,
+        "store": os.path.relpath(store.root, out),
+        "machine": machine(),
+        "job_hosts": hosts,
+        "versions": versions(),
+        "scheduler": args.scheduler or "in-process LocalCluster, 1 worker, 1 thread",
+        "threads_per_job": args.threads or "all cores of the worker",
+        "profile_settings": PROFILES[profile],
+        "scenes": [
+            {
+                "label": s.label,
+                "source": s.source,
+                "flags": s.flags,
+                "manifest": s.manifest or None,
+                "sha256": hashes[s],
+                "triangles": triangles[s],
+            }
+            for s in scenes
+        ],
+        "jobs_total": len(planned),
+        "jobs_run": len(done),
+        "jobs_cached": len(cached),
+        "jobs_failed": failed,
+        "notes": notes,
+        "job_runs": json.loads((store.root / "runs.json").read_text()) if (store.root / "runs.json").is_file() else [],
+        "timing_spread": spread,
+        "wall_s": time.perf_counter() - start,
+    }
     index = write_report(out, entries, environment, store.root)
     run_log["wall_s"] = round(time.perf_counter() - start, 1)
     (out / "run.json").write_text(json.dumps(run_log, indent=1))
-    print(f"spacebvh-reproduce: report {index} ({run_log['wall_s']:.0f} s; {len(done)} jobs run, "
-          f"{len(failed)} failed)", file=sys.stderr)
+    print(
+        f"spacebvh-reproduce: report {index} ({run_log['wall_s']:.0f} s; {len(done)} jobs run, {len(failed)} failed)",
+        file=sys.stderr,
+    )
     return 1 if failed else 0

@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: MIT
 """The report directory: index.html (self-contained: relative links only, inline CSS, no script, no
-network), figures/*.svg|png, tables/*.csv, results/*.json (each experiment's numbers and verdict),
-jobs/ (every job's raw JSON) and environment.json."""
+network), figures/*.svg|png, tables/*.csv, results/*.json (each experiment's numbers and verdict) and
+environment.json. The jobs' raw JSON stays in the result store, which the report names but does not
+copy or link: the report is what gets published, the store is what rebuilds it."""
+
 from __future__ import annotations
 
 import csv
 import html
 import json
-import shutil
 from pathlib import Path
 
 from .experiments import Analysis, Experiment
@@ -32,8 +33,9 @@ code, pre { background: #f6f6f6; font-size: .85em; } pre { padding: .5em; overfl
 
 
 def _verdict_class(verdict: str) -> str:
-    return {"confirmed": "verdict-confirmed", "partly confirmed": "verdict-partly",
-            "not confirmed": "verdict-not"}.get(verdict, "verdict-none")
+    return {"confirmed": "verdict-confirmed", "partly confirmed": "verdict-partly", "not confirmed": "verdict-not"}.get(
+        verdict, "verdict-none"
+    )
 
 
 def _table_html(columns, rows) -> str:
@@ -42,55 +44,72 @@ def _table_html(columns, rows) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
-def write_report(out: Path, entries: list[tuple[Experiment, Analysis, list, list]], environment: dict,
-                 store_root: Path) -> Path:
+def write_report(
+    out: Path, entries: list[tuple[Experiment, Analysis, list, list]], environment: dict, store_root: Path
+) -> Path:
     """entries: (experiment, analysis, [(scene, record, job file)], notes) per experiment."""
     out.mkdir(parents=True, exist_ok=True)
     for sub in ("figures", "tables", "results"):
         (out / sub).mkdir(exist_ok=True)
-    jobs_dir = out / "jobs"
-    sections, summary_rows = [], []
-    for experiment, analysis, jobs, notes in entries:
-        # Raw JSON: the store's files, copied when the store lives elsewhere.
-        links = []
-        for scene, record, path in jobs:
-            target = jobs_dir / path.relative_to(store_root)
-            if store_root.resolve() != jobs_dir.resolve():
-                target.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(path, target)
-            links.append((scene.label, target.relative_to(out).as_posix(), record))
-        figure = None
-        if analysis.table_rows:
-            try:
-                figure = FIGURES[experiment.id](analysis.plot, out / "figures")
-            except Exception as error:  # noqa: BLE001 - a broken figure must not hide the others
-                notes = notes + [f"figure failed: {type(error).__name__}: {error}"]
-        with open(out / "tables" / f"{experiment.id}.csv", "w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(analysis.table_columns)
-            writer.writerows(analysis.table_rows)
-        result = {"experiment": experiment.id, "title": experiment.title, "claim": experiment.claim,
-                  "slide": experiment.slide, "verdict": analysis.verdict, "summary": analysis.summary,
-                  "wrong_answers": analysis.wrong, "embree_wrong_answers": analysis.embree_wrong,
-                  "verified_runs": analysis.verified_runs, "notes": notes,
-                  "table": {"columns": analysis.table_columns, "rows": analysis.table_rows},
-                  "jobs": [link for _, link, _ in links]}
-        with open(out / "results" / f"{experiment.id}.json", "w") as f:
-            json.dump(result, f, indent=1)
-        summary_rows.append((experiment, analysis))
+    sections = [_write_experiment(out, *entry, store_root) for entry in entries]
+    summary_rows = [(experiment, analysis) for experiment, analysis, _, _ in entries]
+    with open(out / "environment.json", "w") as f:
+        json.dump(environment, f, indent=1)
+    index = out / "index.html"
+    index.write_text(_page(summary_rows, sections, environment))
+    (out / "README.md").write_text(_markdown(summary_rows, environment))
+    return index
 
-        commands = "\n".join(f"# {label}\n" + "\n".join(" ".join(c["argv"]) for c in record["commands"])
-                             for label, _, record in links)
-        img = (f'<a href="figures/{experiment.id}.png"><img class="figure" src="figures/{experiment.id}.svg" '
-               f'alt="{html.escape(experiment.title)}"></a>'
-               f'<p class="muted">Figure: <a href="figures/{experiment.id}.svg">SVG</a> · '
-               f'<a href="figures/{experiment.id}.png">PNG</a> · table: <a href="tables/{experiment.id}.csv">CSV</a> · '
-               f'numbers: <a href="results/{experiment.id}.json">JSON</a></p>') if figure else "<p>(no figure: no job finished)</p>"
-        wrong = (f"Wrong answers of our rows (every traced ray checked against Embree, disagreements settled by the "
-                 f"exact arbiter): <b>{analysis.wrong}</b> over {analysis.verified_runs} verified runs; Embree's own "
-                 f"kernel (float, not exact): {analysis.embree_wrong}."
-                 if analysis.verified_runs else "This experiment traces no verified rays (no wrong-answer count applies).")
-        sections.append(f"""
+
+def _write_experiment(
+    out: Path, experiment: Experiment, analysis: Analysis, jobs: list, notes: list, store_root: Path
+) -> str:
+    """Writes the experiment's figure, table and results JSON; returns its section of index.html."""
+    # Each job by its file in the store (relative to the store's root, which environment.json names).
+    links = [(scene.label, path.relative_to(store_root).as_posix(), record) for scene, record, path in jobs]
+    figure = None
+    if analysis.table_rows:
+        try:
+            figure = FIGURES[experiment.id](analysis.plot, out / "figures")
+        except Exception as error:  # noqa: BLE001 - a broken figure must not hide the others
+            notes = notes + [f"figure failed: {type(error).__name__}: {error}"]
+    with open(out / "tables" / f"{experiment.id}.csv", "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(analysis.table_columns)
+        writer.writerows(analysis.table_rows)
+    result = {
+        "experiment": experiment.id,
+        "title": experiment.title,
+        "claim": experiment.claim,
+        "slide": experiment.slide,
+        "verdict": analysis.verdict,
+        "summary": analysis.summary,
+        "wrong_answers": analysis.wrong,
+        "embree_wrong_answers": analysis.embree_wrong,
+        "verified_runs": analysis.verified_runs,
+        "notes": notes,
+        "table": {"columns": analysis.table_columns, "rows": analysis.table_rows},
+        "jobs": [link for _, link, _ in links],
+    }
+    with open(out / "results" / f"{experiment.id}.json", "w") as f:
+        json.dump(result, f, indent=1)
+
+    commands = "\n".join(
+        f"# {label}\n" + "\n".join(" ".join(c["argv"]) for c in record["commands"]) for label, _, record in links
+    )
+    wrong = (
+        f"Wrong answers of our rows (every traced ray checked against Embree, disagreements settled by the "
+        f"exact arbiter): <b>{analysis.wrong}</b> over {analysis.verified_runs} verified runs; Embree's own "
+        f"kernel (float, not exact): {analysis.embree_wrong}."
+        if analysis.verified_runs
+        else "This experiment traces no verified rays (no wrong-answer count applies)."
+    )
+    job_items = "".join(
+        f"<li>{html.escape(label)} ({record['wall_s']:.1f} s on {html.escape(record['host'])}): "
+        f"<code>{html.escape(link)}</code></li>"
+        for label, link, record in links
+    )
+    return f"""
 <h2 id="{experiment.id}">{html.escape(experiment.title)}</h2>
 <div class="claim">
  <div><b>Slide</b> ({html.escape(experiment.slide)}): {html.escape(experiment.claim)}</div>
@@ -98,19 +117,52 @@ def write_report(out: Path, entries: list[tuple[Experiment, Analysis, list, list
   {html.escape(analysis.summary)}</div>
 </div>
 <p class="muted">{html.escape(experiment.method)} {wrong}</p>
-{img}
-{''.join(f'<p class="muted">Note: {html.escape(n)}</p>' for n in notes)}
+{_figure_html(experiment) if figure else "<p>(no figure: no job finished)</p>"}
+{"".join(f'<p class="muted">Note: {html.escape(n)}</p>' for n in notes)}
 {_table_html(analysis.table_columns, analysis.table_rows)}
-<details><summary>Raw results and exact commands ({len(links)} jobs)</summary>
-<ul>{''.join(f'<li><a href="{html.escape(link)}">{html.escape(label)}</a> ({record["wall_s"]:.1f} s on {html.escape(record["host"])})</li>' for label, link, record in links)}</ul>
-<pre>{html.escape(commands)}</pre></details>""")
+<details><summary>Jobs and exact commands ({len(links)} jobs; raw JSON in the result store)</summary>
+<ul>{job_items}</ul>
+<pre>{html.escape(commands)}</pre></details>"""
 
-    overview = _table_html(["experiment", "slide's claim", "verdict", "wrong answers"],
-                           [[e.title, e.claim, a.verdict, a.wrong if a.verified_runs else "-"] for e, a in summary_rows])
-    env = environment
-    with open(out / "environment.json", "w") as f:
-        json.dump(env, f, indent=1)
-    page = f"""<!DOCTYPE html>
+
+def _figure_html(experiment: Experiment) -> str:
+    name = experiment.id
+    return (
+        f'<a href="figures/{name}.png"><img class="figure" src="figures/{name}.svg" '
+        f'alt="{html.escape(experiment.title)}"></a>'
+        f'<p class="muted">Figure: <a href="figures/{name}.svg">SVG</a> · <a href="figures/{name}.png">PNG</a> · '
+        f'table: <a href="tables/{name}.csv">CSV</a> · numbers: <a href="results/{name}.json">JSON</a></p>'
+    )
+
+
+def _job_runs_html(env: dict) -> str:
+    """One line per run that produced the store's results."""
+    return "".join(
+        f"<b>Jobs run by:</b> <code>{html.escape(r['command'])}</code> ({r['jobs_run']} jobs, {r['wall_s']:.0f} s "
+        f"wall, {html.escape(r['date'])}, scheduler {html.escape(r['scheduler'])}"
+        f"{'; ' + html.escape(r['note']) if r.get('note') else ''})<br>"
+        for r in env.get("job_runs", [])
+    )
+
+
+def _noise_html(env: dict) -> str:
+    if not env.get("timing_spread"):
+        return ""
+    return (
+        f"<p><b>Timing noise of this run:</b> the per-run speed ratio between two rows spans a median "
+        f"{100 * env['timing_spread']:.0f} % of its value (min to max over the timed runs); speed differences "
+        "smaller than that are not resolved here.</p>"
+    )
+
+
+def _page(summary_rows, sections: list[str], env: dict) -> str:
+    """index.html: the run's provenance, the summary table, then each experiment's section."""
+    overview = _table_html(
+        ["experiment", "slide's claim", "verdict", "wrong answers"],
+        [[e.title, e.claim, a.verdict, a.wrong if a.verified_runs else "-"] for e, a in summary_rows],
+    )
+    versions = env["versions"]
+    return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>spacebvh: the paper, reproduced</title>
 <style>{CSS}</style></head><body>
 <h1>Object Partitioning Considered Harmful (Popov et al. 2009), reproduced with spacebvh</h1>
@@ -119,49 +171,71 @@ figure is a ratio between rows of one <code>spacebvh compare</code> run: all row
 timed runs go round robin over the rows on the same rays, so a shared machine's drift slows every row alike. Points
 are the median over the timed runs of the per-run ratio; error bars span the runs (min to max). Builders keep one
 colour in every figure.</p>
-<p><b>Command:</b> <code>{html.escape(env['command'])}</code><br>
-{''.join(f"<b>Jobs run by:</b> <code>{html.escape(r['command'])}</code> ({r['jobs_run']} jobs, {r['wall_s']:.0f} s wall, {html.escape(r['date'])}, scheduler {html.escape(r['scheduler'])}{'; ' + html.escape(r['note']) if r.get('note') else ''})<br>" for r in env.get('job_runs', []))}
-<b>Profile:</b> {html.escape(env['profile'])} · <b>jobs:</b> {env['jobs_total']} ({env['jobs_run']} run now,
-{env['jobs_cached']} from the store) · <b>this command's wall time:</b> {env.get('wall_s', 0):.0f} s<br>
-<b>Machine:</b> {html.escape(env['machine']['cpu'])}, {env['machine']['cores']} cores,
-{env['machine']['memory_gib']:.0f} GiB, {html.escape(env['machine']['platform'])} ·
-<b>spacebvh:</b> {html.escape(env['library_version'])} · <b>Python</b> {html.escape(env['versions']['python'])},
-dask {html.escape(env['versions'].get('dask', '-'))}, matplotlib {html.escape(env['versions'].get('matplotlib', '-'))}
+<p><b>Command:</b> <code>{html.escape(env["command"])}</code><br>
+{_job_runs_html(env)}
+<b>Profile:</b> {html.escape(env["profile"])} · <b>jobs:</b> {env["jobs_total"]} ({env["jobs_run"]} run now,
+{env["jobs_cached"]} from the store) · <b>this command's wall time:</b> {env.get("wall_s", 0):.0f} s<br>
+<b>Machine:</b> {html.escape(env["machine"]["cpu"])}, {env["machine"]["cores"]} cores,
+{env["machine"]["memory_gib"]:.0f} GiB, {html.escape(env["machine"]["platform"])} ·
+<b>spacebvh:</b> {html.escape(env["library_version"])} · <b>Python</b> {html.escape(versions["python"])},
+dask {html.escape(versions.get("dask", "-"))}, matplotlib {html.escape(versions.get("matplotlib", "-"))}
 · <a href="environment.json">environment.json</a> (versions, options, scenes and their hashes)</p>
-{f"<p><b>Timing noise of this run:</b> the per-run speed ratio between two rows spans a median {100 * env['timing_spread']:.0f} % of its value (min to max over the timed runs); speed differences smaller than that are not resolved here.</p>" if env.get('timing_spread') else ""}
+{_noise_html(env)}
 <h2>Summary</h2>
 {overview}
-{''.join(f'<p class="muted">Note: {html.escape(n)}</p>' for n in env.get('notes', []))}
-{''.join(sections)}
+{"".join(f'<p class="muted">Note: {html.escape(n)}</p>' for n in env.get("notes", []))}
+{"".join(sections)}
 </body></html>
 """
-    index = out / "index.html"
-    index.write_text(page)
-    (out / "README.md").write_text(_markdown(summary_rows, env))
-    return index
 
 
 def _markdown(summary_rows, env: dict) -> str:
     """README.md beside index.html: the verdicts and figures where a repository browser shows them."""
-    lines = ["# Popov et al. 2009, reproduced with spacebvh", "",
-             "Generated by `spacebvh-reproduce`; open [index.html](index.html) for the full report (tables, exact "
-             "commands, raw JSON in [jobs/](jobs)).", "",
-             f"- Command: `{env['command']}`",
-             *[f"- Jobs run by `{r['command']}`: {r['jobs_run']} jobs in {r['wall_s']:.0f} s wall ({r['date']}, "
-               f"scheduler {r['scheduler']}{'; ' + r['note'] if r.get('note') else ''})" for r in env.get("job_runs", [])],
-             f"- This report: written in {env.get('wall_s', 0):.0f} s by the command above ({env['jobs_run']} jobs run by it, "
-             f"{env['jobs_cached']} taken from the store)",
-             *([f"- Timing noise: the per-run speed ratio between two rows spans a median {100 * env['timing_spread']:.0f} % "
-                "of its value; smaller speed differences are not resolved by this run"] if env.get("timing_spread") else []),
-             f"- Machine: {env['machine']['cpu']}, {env['machine']['cores']} cores; spacebvh {env['library_version']} "
-             f"(git {env.get('git', '-')})", "",
-             "| experiment | slide's claim | verdict | our numbers | wrong answers |", "|---|---|---|---|---:|"]
+    lines = [
+        "# Popov et al. 2009, reproduced with spacebvh",
+        "",
+        "Generated by `spacebvh-reproduce`; open [index.html](index.html) for the full report (tables, exact "
+        "commands; each job's raw JSON stays in the result store, which rebuilds the report).",
+        "",
+        f"- Command: `{env['command']}`",
+        *[
+            f"- Jobs run by `{r['command']}`: {r['jobs_run']} jobs in {r['wall_s']:.0f} s wall ({r['date']}, "
+            f"scheduler {r['scheduler']}{'; ' + r['note'] if r.get('note') else ''})"
+            for r in env.get("job_runs", [])
+        ],
+        f"- This report: written in {env.get('wall_s', 0):.0f} s by the command above ({env['jobs_run']} jobs run "
+        f"by it, {env['jobs_cached']} taken from the store)",
+        *(
+            [
+                "- Timing noise: the per-run speed ratio between two rows spans a median "
+                f"{100 * env['timing_spread']:.0f} % of its value; smaller speed differences are not resolved by "
+                "this run"
+            ]
+            if env.get("timing_spread")
+            else []
+        ),
+        f"- Machine: {env['machine']['cpu']}, {env['machine']['cores']} cores; spacebvh {env['library_version']} "
+        f"(git {env.get('git', '-')})",
+        "",
+        "| experiment | slide's claim | verdict | our numbers | wrong answers |",
+        "|---|---|---|---|---:|",
+    ]
     for e, a in summary_rows:
         cell = lambda text: str(text).replace("|", "\\|").replace("\n", " ")  # noqa: E731
-        lines.append(f"| [{cell(e.title)}](index.html#{e.id}) | {cell(e.claim)} | **{a.verdict}** | {cell(a.summary)} | "
-                     f"{a.wrong if a.verified_runs else '-'} |")
+        lines.append(
+            f"| [{cell(e.title)}](index.html#{e.id}) | {cell(e.claim)} | **{a.verdict}** | {cell(a.summary)} | "
+            f"{a.wrong if a.verified_runs else '-'} |"
+        )
     for e, a in summary_rows:
         if a.table_rows:
-            lines += ["", f"## {e.title}", "", f"**Verdict: {a.verdict}.** {a.summary}", "",
-                      f"![{e.title}](figures/{e.id}.svg)", "", f"Table: [tables/{e.id}.csv](tables/{e.id}.csv)"]
+            lines += [
+                "",
+                f"## {e.title}",
+                "",
+                f"**Verdict: {a.verdict}.** {a.summary}",
+                "",
+                f"![{e.title}](figures/{e.id}.svg)",
+                "",
+                f"Table: [tables/{e.id}.csv](tables/{e.id}.csv)",
+            ]
     return "\n".join(lines) + "\n"
