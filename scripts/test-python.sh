@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # The Python package's test: `pip install .` into a fresh virtual environment (build/venv), import
-# it there, then run python/tests with pytest (its summary line is the last line of the output).
+# it there, check the Python sources with ruff and the committed type stub against one generated from
+# the installed module, then run python/tests with pytest (its summary line is the last line of the
+# output). Any of these failing fails the script.
 # scripts/test.sh runs it after the C++ suite; run alone it builds the C++ itself (through pip).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,5 +22,10 @@ echo "pip install . took $((SECONDS - start)) s"
 rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.
 (cd / && "$venv/bin/python" -c "import spacebvh; print('import spacebvh:', spacebvh.__version__, spacebvh.__file__)")
+# Lint and format (pyproject.toml [tool.ruff]) of the package, its tests and the benchmark scripts.
+"$venv/bin/ruff" check python bench
+"$venv/bin/ruff" format --check python bench
+# python/spacebvh/_core.pyi is generated from the module: a binding change needs it regenerated.
+bash scripts/generate-stubs.sh --check "$venv/bin/python"
 # Exit status 5 (no tests collected) fails this script too: an empty run must not read as a pass.
 PATH="$venv/bin:$PATH" "$venv/bin/python" -m pytest -ra python/tests
