@@ -60,7 +60,7 @@ with open(path, "w") as f:
 PY
 )
 ruff=$(dirname "$python")/ruff
-"$ruff" check --quiet --fix --exit-zero --config "$repo/pyproject.toml" "$tmp/_core.pyi"
+"$ruff" check --quiet --fix-only --config "$repo/pyproject.toml" "$tmp/_core.pyi"
 "$ruff" format --quiet --config "$repo/pyproject.toml" "$tmp/_core.pyi"
 if [ "$check" = 1 ]; then
     if ! diff -u "$stub" "$tmp/_core.pyi"; then
