@@ -4,8 +4,8 @@ maps of traversal cost."""
 
 from __future__ import annotations
 
-from ..results import RAY_KINDS, rows_by_label, speed_ratio
-from .base import PROFILES, Analysis, Experiment, compare_params, fmt, majority, ratio_text, row_wrong
+from .experiment import PROFILES, Analysis, Experiment, compare_params, fmt, majority, ratio_text, row_wrong
+from .results import RAY_KINDS, rows_by_label, speed_ratio
 
 
 class Termination(Experiment):

@@ -4,8 +4,8 @@ evaluation, and the full and kd search spaces against CBVH."""
 
 from __future__ import annotations
 
-from ..results import RAY_KINDS, speed_ratio
-from .base import PROFILES, Analysis, Experiment, compare_params, each_row, fmt, majority, ratio_text, row_wrong
+from .experiment import PROFILES, Analysis, Experiment, compare_params, each_row, fmt, majority, ratio_text, row_wrong
+from .results import RAY_KINDS, speed_ratio
 
 # The grid search space's two resolutions. The slides use G = R N^(1/6) with R = 64 and R = 4K; this
 # build enumerates every configuration of a G^3 grid exactly (~26 G^6 per node, G <= 16), which at

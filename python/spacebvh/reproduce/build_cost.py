@@ -6,9 +6,9 @@ from __future__ import annotations
 import math
 import statistics
 
-from ..results import build_ms_spread, rows_by_label, speed_ratio
-from ..scenes import Scene
-from .base import PROFILES, Analysis, Experiment, compare_params, fmt, majority, ratio_text, row_wrong
+from .experiment import PROFILES, Analysis, Experiment, compare_params, fmt, majority, ratio_text, row_wrong
+from .results import build_ms_spread, rows_by_label, speed_ratio
+from .scenes import Scene
 
 
 class BuildQuality(Experiment):

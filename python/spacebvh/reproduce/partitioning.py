@@ -4,8 +4,8 @@ overlap penalty C_o."""
 
 from __future__ import annotations
 
-from ..results import RAY_KINDS, rows_by_label, speed_ratio
-from .base import PROFILES, Analysis, Experiment, compare_params, each_row, fmt, majority, ratio_text, row_wrong
+from .experiment import PROFILES, Analysis, Experiment, compare_params, each_row, fmt, majority, ratio_text, row_wrong
+from .results import RAY_KINDS, rows_by_label, speed_ratio
 
 
 class Presplit(Experiment):

@@ -3,14 +3,15 @@
 the jobs' JSON into a table, numbers and a verdict on the slide's claim.
 
 Every speed number is a ratio between rows of one `compare` run (round robin, same rays, same
-machine), never times taken in different jobs."""
+machine), never times taken in different jobs. This module lists them; each family lives in a module
+of its own (search_spaces, partitioning, build_cost, traversal) on the types of experiment.py."""
 
 from __future__ import annotations
 
-from .base import PROFILES, Analysis, Experiment, count_wrong
-from .builds import BuildQuality, Scaling
+from .build_cost import BuildQuality, Scaling
+from .experiment import PROFILES, Analysis, Experiment, count_wrong
 from .partitioning import Overlap, Presplit
-from .search import Grid, Lookahead, Optimum, SearchSpaces
+from .search_spaces import Grid, Lookahead, Optimum, SearchSpaces
 from .traversal import Heatmaps, Termination
 
 EXPERIMENTS = [

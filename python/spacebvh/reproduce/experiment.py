@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..results import RAY_KINDS, rows_by_label, verified, wrong_total
-from ..scenes import Scene
+from .results import RAY_KINDS, rows_by_label, verified, wrong_total
+from .scenes import Scene
 
 # Ray and run settings per profile. quick: built-in scenes, a few minutes on 2 cores (the test suite);
 # full: the shared scenes, about half an hour on 2 cores.
