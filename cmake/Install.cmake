@@ -5,6 +5,9 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 install(DIRECTORY include/spacebvh DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+# The installed targets' usage requirements: the include directory below (the one the headers go
+# to), C++20 (target_compile_features in CMakeLists.txt), and their link dependencies, found again by
+# the package config (TBB; Embree when the tools were built with it).
 install(TARGETS spacebvh spacebvh_tools EXPORT spacebvh-targets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
