@@ -180,13 +180,16 @@ TEST(Settings, CompareRowKeysSetTheirSetting) {
     }
 }
 
-// The command line's reference lists every setting: its flag and row key.
+// The reference of every front end lists every setting: docs/cli.md its flag and row key,
+// docs/python.md its name (python/tests/test_settings.py checks the other way round).
 TEST(Settings, DocsListEverySetting) {
-    const std::string cli_doc = read_doc("cli.md");
+    const std::string cli_doc = read_doc("cli.md"), python_doc = read_doc("python.md");
     ASSERT_FALSE(cli_doc.empty());
+    ASSERT_FALSE(python_doc.empty());
     for (const BuildSetting& setting : build_settings()) {
         EXPECT_NE(cli_doc.find("`" + setting.flag), std::string::npos) << setting.flag << " in docs/cli.md";
         EXPECT_NE(cli_doc.find("`" + setting.row_key + "`"), std::string::npos) << setting.row_key << " in docs/cli.md";
+        EXPECT_NE(python_doc.find("`" + setting.name + "`"), std::string::npos) << setting.name << " in docs/python.md";
     }
 }
 

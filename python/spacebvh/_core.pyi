@@ -39,6 +39,23 @@ class Scene:
     def hit_points(self, primitive: npt.ArrayLike, u: npt.ArrayLike, v: npt.ArrayLike) -> npt.NDArray[np.floating[Any]]:
         """Points at barycentrics (u, v) of the triangles `primitive`, (k, 3); NaN rows for misses."""
 
+# A build setting's value (build_settings()): a flag, a whole number or bytes, a number, search space names.
+_SettingValue = Union[bool, int, float, str]
+
+class Quality:
+    """What most users pick: fast, balanced or high."""
+
+    fast: Quality
+    balanced: Quality
+    high: Quality
+    def __init__(self, value: int) -> None: ...
+    def __int__(self) -> int: ...
+    def __index__(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def value(self) -> int: ...
+
 class Bvh:
     """A binary BVH and the scene it was built over."""
 
@@ -46,6 +63,8 @@ class Bvh:
     def scene(self) -> Scene: ...
     @property
     def builder(self) -> str: ...
+    @property
+    def settings(self) -> Optional[dict[str, _SettingValue]]: ...
     @property
     def cost_model(self) -> str: ...
     @property
@@ -223,23 +242,16 @@ def kernels() -> list[str]:
 
 def build(
     scene: Scene,
-    builder: str = "binned",
+    builder: Optional[str] = None,
     *,
-    overlap_penalty: Optional[float] = None,
-    traversal_cost: float = 1.0,
-    intersection_cost: float = 1.0,
-    leaf_block: int = 1,
-    max_leaf_size: int = 8,
-    reference_budget: float = 1.3,
-    search: str = "",
-    object_bins: int = 32,
-    spatial_bins: int = 32,
-    spatial_gate: Optional[float] = None,
-    lookahead_top: float = 0.0,
-    optimize: int = 0,
+    quality: Union[Quality, str, None] = None,
     threads: int = 0,
+    **settings: Optional[_SettingValue],
 ) -> Bvh:
-    """Builds a BVH with a named builder (builders())."""
+    """Builds a BVH with a named builder (builders()) or a quality level, and build settings as keywords."""
+
+def build_settings() -> list[dict[str, Any]]:
+    """The keywords build() takes: name, type, default, range, help, flag, row_key, example."""
 
 def random_rays(scene: Scene, count: int, seed: int = 1) -> _Rays:
     """The random rays of docs/rays.md: (origins, directions)."""
