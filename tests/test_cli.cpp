@@ -408,7 +408,11 @@ TEST_F(Cli, OptimizeInBuildAndCompare) {
         for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(rows[row][kind]["wrong"], 0) << row << kind;
 
     expect_clean_failure("build builtin:soup --optimize-iterations 5000 --no-epo", {"reinsertion iterations", "5000"});
-    expect_clean_failure("build builtin:soup --optimize-iterations 0 --no-epo", {"--optimize-iterations"});
+    // 0 iterations: no optimisation, as `optimize=0` in a row and in Python.
+    ASSERT_EQ(run("build builtin:soup --builder binned --optimize-iterations 0 --no-epo --json zero.json").exit_code,
+              0);
+    EXPECT_EQ(read_json("zero.json")["builder"], "binned");
+    expect_clean_failure("build builtin:soup --optimize-iterations x --no-epo", {"--optimize-iterations"});
     expect_clean_failure("compare builtin:soup --builders 'binned@optimize=x'", {"optimize"});
 }
 

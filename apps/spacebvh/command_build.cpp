@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "spacebvh/tools/make_tree.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
 #include "spacebvh/tree_file.hpp"
@@ -65,7 +66,7 @@ void add_build_command(CLI::App& app) {
             std::printf("saved            %s\n", options->save_path.c_str());
         }
         const size_t peak_rss = peak_rss_bytes();
-        const uint64_t estimate = estimated_build_bytes(scene, build_options);
+        const uint64_t estimate = estimate_tree_memory(scene, build_options);
         std::printf(
             "peak memory      %.1f MiB (resident, whole process); %.1f MiB at the end of the build, of which "
             "%.1f MiB the scene; the build's estimate %.1f MiB\n",

@@ -12,6 +12,7 @@
 #include "compare_rows.hpp"
 #include "compare_table.hpp"
 #include "spacebvh/presets.hpp"
+#include "spacebvh/settings.hpp"
 #include "spacebvh/tools/embree_scene.hpp"
 #include "ray_sets.hpp"
 #include "spacebvh/tools/metrics.hpp"
@@ -74,10 +75,10 @@ void add_compare_command(CLI::App& app) {
     command->add_option("scenes", options->sources, "scene files or builtin:NAME (default: every built-in scene)");
     command
         ->add_option("--builders", options->builders,
-                     "comma-separated builders, each NAME or "
-                     "NAME@co=X;budget=Y;bins=Z;spatialbins=Z;gate=A;search=object+grid;grid=R;gridmax=G;lookahead=D;"
-                     "candidates=K;top=S;sweep=1;samples=K;optimize=N (NAME+opt: optimised with the default effort); "
-                     "the first is the ratio baseline")
+                     "comma-separated builders, each NAME or NAME@key=value;key=value with the keys " +
+                         known_settings(SettingSpelling::row_key) +
+                         " (each as its build option; e.g. spatial@co=inf;search=object+grid); NAME+opt: optimised "
+                         "with the default effort; the first is the ratio baseline")
         ->capture_default_str();
     command->add_option("--embree", options->embree, "Embree 3 quality rows: any of low,medium,high, or 'none'")
         ->capture_default_str();
@@ -155,7 +156,7 @@ void add_compare_command(CLI::App& app) {
             "# spacebvh compare: %u threads, C_T=%g C_I=%g (C_o per row), max leaf %u; Mrays/s = median of %d "
             "runs; ratios to %s\n\n",
             options->common.effective_threads(), cost.traversal_cost, cost.intersection_cost,
-            options->build.max_leaf_size, options->runs, builders.front().label.c_str());
+            builders.front().options.limits.max_leaf_size, options->runs, builders.front().label.c_str());
 
         for (const std::string& source : sources) {
             const Scene scene = load_scene(source, transform);

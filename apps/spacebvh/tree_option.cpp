@@ -4,7 +4,6 @@
 #include <sstream>
 
 #include "cli_common.hpp"
-#include "spacebvh/tree_file.hpp"
 
 namespace spacebvh::cli {
 
@@ -15,7 +14,7 @@ void TreeOption::add_to(CLI::App& command, const std::string& help) {
 
 Bvh tree_for(const TreeOption& tree, const Scene& scene, const TreeRecipe& options, double* milliseconds) {
     const auto start = std::chrono::steady_clock::now();
-    Bvh bvh = tree.given() ? load_bvh(tree.path, scene.triangles) : build_tree(scene, options);
+    Bvh bvh = build_tree(scene, tree.given() ? TreeRecipe::from_file(tree.path) : options);
     if (milliseconds) *milliseconds = milliseconds_since(start);
     return bvh;
 }

@@ -23,6 +23,18 @@ BuildConfig config_for(const std::string& builder);
 // One line each, for --help.
 std::string describe_builder(const std::string& name);
 
+// Embree's own binary trees, offered beside our presets under these names ("embree-medium",
+// "embree-high"); the tools library builds them (spacebvh/tools/embree_builder.hpp), the core knows
+// their names so that every front end reads a builder name the same way (spacebvh/recipe.hpp).
+const std::vector<std::string>& embree_tree_names();
+bool is_embree_tree(const std::string& builder);
+
+// "fast", "balanced", "high", in Quality order.
+std::vector<std::string> quality_names();
+const char* to_string(Quality quality);
+// Throws Error for an unknown name, listing the known ones.
+Quality parse_quality(const std::string& name);
+
 // "object,binned,spatial,grid" (names separated by ',' or '+'; any union) -> SearchSpace bits:
 // object = object_sweep, binned = object_binned, spatial = spatial_binned, spatial-sweep =
 // spatial_sweep, grid = grid. Throws Error naming an unknown name, or for an empty list.

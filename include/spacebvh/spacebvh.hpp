@@ -12,4 +12,6 @@
 #include "spacebvh/geometry.hpp"
 #include "spacebvh/memory_estimate.hpp"
 #include "spacebvh/mesh.hpp"
+#include "spacebvh/recipe.hpp"
+#include "spacebvh/settings.hpp"
 #include "spacebvh/trace.hpp"

@@ -2,8 +2,9 @@
 """spacebvh: BVHs built by space subdivision (Popov et al. 2009) and exact ray traversal.
 
 Scenes come from files (``load_scene``) or NumPy meshes (``mesh``); ``build`` makes a tree with a
-named builder; a ``Tracer`` answers batches of NumPy rays with the exact arbiter's closest or any
-hits, releasing the GIL and using every core (``threads=`` limits that). float64 meshes keep their
+named builder or a ``Quality`` and the build settings as keywords (``build_settings()``); a
+``Tracer`` answers batches of NumPy rays with the exact arbiter's closest or any hits, releasing the
+GIL and using every core (``threads=`` limits that). float64 meshes keep their
 precision at large coordinates: they are traced in a frame centred on their bounds and answer in the
 caller's frame as float64. Errors in input or options raise ``spacebvh.Error`` (a RuntimeError and
 a ValueError) naming the argument and the element; wrong dtypes raise TypeError.
@@ -22,11 +23,13 @@ from ._core import (
     Bvh,
     EmbreeTracer,
     Error,
+    Quality,
     RayQueries,
     Scene,
     Tracer,
     Tracer64,
     build,
+    build_settings,
     builders,
     builtin_scenes,
     containment_direction,
@@ -51,12 +54,14 @@ __all__ = [
     "Bvh",
     "EmbreeTracer",
     "Error",
+    "Quality",
     "RayQueries",
     "Scene",
     "Tracer",
     "Tracer64",
     "__version__",
     "build",
+    "build_settings",
     "builders",
     "builtin_scenes",
     "cli_executable",

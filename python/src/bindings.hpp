@@ -11,6 +11,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "numpy_args.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/recipe.hpp"
 #include "spacebvh/tools/scene.hpp"
 #include "spacebvh/trace.hpp"
 
@@ -34,10 +36,12 @@ struct PyScene {
     Frame frame;
 };
 
-// A tree with the scene it was built over (a tracer needs both).
+// A tree with the scene it was built over (a tracer needs both), and the recipe that built it (null
+// for a tree loaded from a file).
 struct PyBvh {
     PyScene scene;
     std::shared_ptr<const Bvh> bvh;
+    std::shared_ptr<const TreeRecipe> recipe = nullptr;
 };
 
 struct PyTracer {
@@ -85,6 +89,7 @@ void without_gil(int threads, Work&& work) {
 Camera camera_in_frame(const PyScene& scene, const std::string& text);
 
 void bind_scenes(py::module_& m);
+void bind_settings(py::module_& m);  // settings.cpp: Quality, build_settings()
 void bind_build(py::module_& m);
 py::class_<PyTracer> bind_tracer(py::module_& m);  // the class, for bind_render's methods
 void bind_rays(py::module_& m);
@@ -92,6 +97,13 @@ void bind_render(py::module_& m, py::class_<PyTracer>& tracer);
 void bind_embree(py::module_& m);
 void bind_queries(py::module_& m);  // queries.cpp: RayQueries
 void bind_float64(py::module_& m);  // float64.cpp: Tracer64
+
+// settings.cpp: build()'s recipe from its builder or quality and its keywords (exactly the settings
+// table's names); a recipe's settings as a dict; build()'s docstring, listing the settings.
+TreeRecipe recipe_from(const std::optional<std::string>& builder, const py::object& quality,
+                       const py::kwargs& settings);
+py::dict settings_of(const TreeRecipe& recipe);
+const std::string& build_doc();
 
 // Closest hits as (t, primitive, u, v) arrays: t in the scene's dtype (inf on a miss), primitive
 // int64 (-1 on a miss), u, v float32. Used by every tracer binding.

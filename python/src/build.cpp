@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: MIT
-// Building trees: the named builders and their options (as the CLI's), Embree 3's own binary trees,
-// and the trees' metrics.
+// Building trees: a builder or quality level with the build settings (settings.cpp), Embree 3's own
+// binary trees, and the trees' metrics.
 #include <optional>
 
 #include "bindings.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tree_file.hpp"
 #include "spacebvh/tools/embree_builder.hpp"
+#include "spacebvh/tools/make_tree.hpp"
 #include "spacebvh/tools/metrics.hpp"
 
 namespace spacebvh::python {
@@ -15,35 +16,12 @@ using namespace spacebvh::tools;
 
 namespace {
 
-PyBvh build(const PyScene& scene, const std::string& builder, std::optional<float> overlap_penalty,
-            float traversal_cost, float intersection_cost, uint32_t leaf_block, uint32_t max_leaf_size,
-            float reference_budget, const std::string& search, uint32_t object_bins, uint32_t spatial_bins,
-            std::optional<float> spatial_gate, float lookahead_top, uint32_t optimize, int threads) {
-    // Embree 3's own binary trees (as the CLI's embree-medium / embree-high): the cost model and the
-    // optimiser apply to them, our search options do not.
-    const bool embree_tree = is_embree_tree(builder);
-    if (embree_tree && (!search.empty() || spatial_gate || lookahead_top != 0.0f))
-        throw Error("search, spatial_gate and lookahead_top apply to our builders, not to Embree's tree '" + builder +
-                    "'");
-    BuildConfig options = config_for(embree_tree ? "binned" : builder);
-    if (!search.empty()) options.search_spaces = parse_search_spaces(search);
-    options.object.bins = object_bins;
-    options.spatial.bins = spatial_bins;
-    if (spatial_gate) options.spatial.gate_alpha = *spatial_gate;
-    if (overlap_penalty) options.cost.overlap_penalty = *overlap_penalty;
-    options.cost.traversal_cost = traversal_cost;
-    options.cost.intersection_cost = intersection_cost;
-    options.cost.leaf_block = leaf_block;
-    options.limits.max_leaf_size = max_leaf_size;
-    options.limits.reference_budget = reference_budget;
-    options.lookahead.top_share = lookahead_top;
-    options.reinsertion.iterations = optimize;
-    options.validate();
+PyBvh build(const PyScene& scene, const std::optional<std::string>& builder, const py::object& quality, int threads,
+            const py::kwargs& settings) {
+    auto recipe = std::make_shared<TreeRecipe>(recipe_from(builder, quality, settings));
     auto bvh = std::make_shared<Bvh>();
-    without_gil(threads, [&] {
-        *bvh = embree_tree ? build_embree_tree(*scene.scene, builder, options) : spacebvh::build(*scene.scene, options);
-    });
-    return {scene, std::move(bvh)};
+    without_gil(threads, [&] { *bvh = make_tree(*scene.scene, *recipe); });
+    return {scene, std::move(bvh), std::move(recipe)};
 }
 
 py::dict stats_of(const PyBvh& tree, bool with_epo) {
@@ -85,6 +63,9 @@ void bind_build(py::module_& m) {
         .def_property_readonly(
             "builder", [](const PyBvh& t) { return t.bvh->builder; },
             "The builder's name, '+opt' when reinsertion optimised it.")
+        .def_property_readonly(
+            "settings", [](const PyBvh& t) { return t.recipe ? py::object(settings_of(*t.recipe)) : py::none(); },
+            "The build settings the tree was built with (build_settings() names), None for a loaded tree.")
         .def_property_readonly(
             "cost_model", [](const PyBvh& t) { return t.bvh->cost.describe(); },
             "The cost model the tree was built and is scored with.")
@@ -139,19 +120,8 @@ void bind_build(py::module_& m) {
         "Reads a tree file (Bvh.save, or the CLI's build --save) built over this scene; raises spacebvh.Error naming "
         "the file when it is truncated, corrupted, of another format version or built over other geometry.");
 
-    m.def("build", &build, py::arg("scene"), py::arg("builder") = "binned", py::kw_only(),
-          py::arg("overlap_penalty") = py::none(), py::arg("traversal_cost") = 1.0f,
-          py::arg("intersection_cost") = 1.0f, py::arg("leaf_block") = 1u, py::arg("max_leaf_size") = 8u,
-          py::arg("reference_budget") = 1.3f, py::arg("search") = "", py::arg("object_bins") = 32u,
-          py::arg("spatial_bins") = 32u, py::arg("spatial_gate") = py::none(), py::arg("lookahead_top") = 0.0f,
-          py::arg("optimize") = 0u, py::arg("threads") = 0,
-          "Builds a BVH with a named builder (builders()); overlap_penalty defaults to the builder's own C_o "
-          "(float('inf'): disjoint children only); search = the CLI's --search ('binned,spatial': the fast spatial "
-          "variant; '' = the builder's own); object_bins, spatial_bins = --bins, --spatial-bins; spatial_gate = "
-          "--spatial-gate (None = the builder's own alpha); lookahead_top = --lookahead-top (nodes with at least "
-          "this share of the references choose their split by building each search space's best out to the leaves; "
-          "0 = off); optimize = reinsertion iterations (0 = off, 16 = the CLI's --optimize). Releases the GIL and "
-          "uses `threads` threads (0 = every core); the tree is the same whatever `threads`.");
+    m.def("build", &build, py::arg("scene"), py::arg("builder") = py::none(), py::kw_only(),
+          py::arg("quality") = py::none(), py::arg("threads") = 0, build_doc().c_str());
 }
 
 }  // namespace spacebvh::python

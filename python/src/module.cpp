@@ -37,6 +37,7 @@ PYBIND11_MODULE(_core, m) {
     });
 
     bind_scenes(m);
+    bind_settings(m);
     bind_build(m);
     py::class_<PyTracer> tracer = bind_tracer(m);
     bind_render(m, tracer);

@@ -51,6 +51,36 @@ std::string describe_builder(const std::string& name) {
     return preset ? preset->description : "";
 }
 
+const std::vector<std::string>& embree_tree_names() {
+    static const std::vector<std::string> names{"embree-medium", "embree-high"};
+    return names;
+}
+
+bool is_embree_tree(const std::string& builder) {
+    const auto& names = embree_tree_names();
+    return std::find(names.begin(), names.end(), builder) != names.end();
+}
+
+std::vector<std::string> quality_names() { return {"fast", "balanced", "high"}; }
+
+const char* to_string(Quality quality) {
+    switch (quality) {
+        case Quality::fast:
+            return "fast";
+        case Quality::balanced:
+            return "balanced";
+        case Quality::high:
+            return "high";
+    }
+    return "?";
+}
+
+Quality parse_quality(const std::string& name) {
+    for (Quality quality : {Quality::fast, Quality::balanced, Quality::high})
+        if (name == to_string(quality)) return quality;
+    throw Error("unknown quality '" + name + "' (known: fast, balanced, high)");
+}
+
 uint32_t parse_search_spaces(const std::string& names) {
     uint32_t spaces = 0;
     std::string name;

@@ -8,6 +8,7 @@
 
 #include "spacebvh/tools/embree_scene.hpp"
 #include "spacebvh/build.hpp"
+#include "spacebvh/presets.hpp"
 #include "spacebvh/tools/scene.hpp"
 
 namespace spacebvh::tools {
@@ -51,10 +52,10 @@ Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const Build
 // available) before it starts.
 uint64_t estimate_embree_tree_memory(uint64_t triangle_count, const std::string& builder, const BuildConfig& options);
 
-// Embree's trees as builder names beside our presets ("embree-medium", "embree-high"), so every front
-// end (CLI, Python) offers and builds them the same way.
-const std::vector<std::string>& embree_tree_names();
-bool is_embree_tree(const std::string& builder);
+// Embree's trees as builder names beside our presets ("embree-medium", "embree-high"): the core's
+// registry of names (spacebvh/presets.hpp), so every front end reads a builder name the same way.
+using spacebvh::embree_tree_names;
+using spacebvh::is_embree_tree;
 
 // The Embree tree named `builder` (is_embree_tree): build_bvh_with_embree at that quality, then
 // optimize_bvh with `options` (a no-op without reinsertion iterations). Throws Error for another name.

@@ -315,16 +315,6 @@ Bvh build_bvh_with_embree(const Scene& scene, EmbreeQuality quality, const Build
     return bvh;
 }
 
-const std::vector<std::string>& embree_tree_names() {
-    static const std::vector<std::string> names{"embree-medium", "embree-high"};
-    return names;
-}
-
-bool is_embree_tree(const std::string& builder) {
-    const auto& names = embree_tree_names();
-    return std::find(names.begin(), names.end(), builder) != names.end();
-}
-
 uint64_t estimate_embree_tree_memory(uint64_t triangle_count, const std::string& builder, const BuildConfig& options) {
     const bool high = builder == "embree-high";
     const uint64_t capacity =
