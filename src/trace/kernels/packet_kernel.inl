@@ -75,13 +75,18 @@ struct PacketStackEntry {
     uint32_t child, count, first, parent, slot;
 };
 
-// The watertight triangle test's per-ray constants for a packet's leaves. When every ray shears along
-// the first ray's axes (same_axes), a leaf most of a chunk's rays enter tests one triangle against
-// S::kLanes rays, the shears kept in the SoA arrays (shear_packet). A ray that tests a leaf on its own
-// makes its WatertightRay when it first does: most rays of most packets never need one.
-struct PacketShears {
+// The shear axes of the watertight triangle test (WatertightRay's kx, ky, kz) when every ray of the
+// packet shears along the first ray's (`shared`): then a leaf most of a chunk's rays enter tests one
+// triangle against S::kLanes rays, the shears kept in the SoA arrays (shear_packet). Passed by value:
+// plain values, which no store through `hits` can change, stay in registers.
+struct PacketShearAxes {
     int kx, ky, kz;
-    bool same_axes;
+    bool shared;
+};
+
+// The WatertightRay of each ray that tests a leaf on its own, made when it first does: most rays of
+// most packets never need one.
+struct LazyShears {
     union LazyShear {
         WatertightRay shear;
         LazyShear() {}  // left unmade until its ray needs it
@@ -89,7 +94,6 @@ struct PacketShears {
     LazyShear lazy[kMaxPacket];
     uint8_t made[kMaxPacket] = {};
 
-    PacketShears(const WatertightRay& first, bool same) : kx(first.kx), ky(first.ky), kz(first.kz), same_axes(same) {}
     const WatertightRay& of(const Ray* rays, uint32_t i) {
         if (!made[i]) {
             new (&lazy[i].shear) WatertightRay(rays[i]);
@@ -225,8 +229,8 @@ template <class S, bool kStats>
 template <class S, bool kAnyHit, bool kStats>
 [[gnu::always_inline]] inline bool leaf_over_rays(const TrianglePack* packs, const PacketStackEntry& leaf, uint32_t c,
                                                   unsigned entering, const Ray* rays, PacketRaysSoA& soa,
-                                                  const PacketShears& shears, ActivePacketRays<S::kLanes>& active,
-                                                  Hit* hits, TraversalStats* stats) {
+                                                  PacketShearAxes axes, ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                  TraversalStats* stats) {
     constexpr uint32_t L = uint32_t(S::kLanes);
     const uint32_t base = c * L;
     for (uint32_t lane_index = 0; lane_index < leaf.count && entering; ++lane_index) {
@@ -238,7 +242,7 @@ template <class S, bool kAnyHit, bool kStats>
                     uint64_t(__builtin_popcount(entering)) * std::min(4u, leaf.count - lane_index);
         alignas(64) float u[L], v[L], w[L];
         unsigned outside, inside;
-        edges_over_rays<S>(pack, lane, soa, base, shears.kx, shears.ky, shears.kz, u, v, w, outside, inside);
+        edges_over_rays<S>(pack, lane, soa, base, axes.kx, axes.ky, axes.kz, u, v, w, outside, inside);
         const unsigned candidates = entering & ~outside;
         if (!candidates) continue;
         Vec3 vertex[3];
@@ -277,7 +281,7 @@ template <class S, bool kAnyHit, bool kStats>
 template <class S, bool kAnyHit, bool kStats>
 [[gnu::always_inline]] inline bool leaf_ray_by_ray(const TrianglePack* packs, const PacketStackEntry& leaf, uint32_t c,
                                                    unsigned entering, const Ray* rays, PacketRaysSoA& soa,
-                                                   PacketShears& shears, ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                   LazyShears& shears, ActivePacketRays<S::kLanes>& active, Hit* hits,
                                                    TraversalStats* stats) {
     const uint32_t base = c * uint32_t(S::kLanes);
     for (; entering; entering &= entering - 1) {
@@ -299,16 +303,17 @@ template <class S, bool kAnyHit, bool kStats>
 template <class S, bool kAnyHit, bool kStats>
 [[gnu::always_inline]] inline bool trace_packet_leaf(const WideLayout<S::kLanes>& layout, const PacketStackEntry& leaf,
                                                      const Ray* rays, PacketRaysSoA& soa, const PacketFrustum& frustum,
-                                                     PacketShears& shears, ActivePacketRays<S::kLanes>& active,
-                                                     Hit* hits, TraversalStats* stats) {
+                                                     PacketShearAxes axes, LazyShears& shears,
+                                                     ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                     TraversalStats* stats) {
     constexpr uint32_t L = uint32_t(S::kLanes);
     unsigned entering[kMaxPacket / L];
     rays_entering_leaf<S, kStats>(layout.nodes[leaf.parent], leaf, soa, frustum, active, entering, stats);
     const TrianglePack* packs = layout.packs.data();
     for (uint32_t c = leaf.first / L; c < active.chunks; ++c) {
         // Most of the chunk's rays enter: one triangle against all of them at a time.
-        if (!S::kScalarTriangles && shears.same_axes && 2 * uint32_t(__builtin_popcount(entering[c])) >= L) {
-            if (leaf_over_rays<S, kAnyHit, kStats>(packs, leaf, c, entering[c], rays, soa, shears, active, hits, stats))
+        if (!S::kScalarTriangles && axes.shared && 2 * uint32_t(__builtin_popcount(entering[c])) >= L) {
+            if (leaf_over_rays<S, kAnyHit, kStats>(packs, leaf, c, entering[c], rays, soa, axes, active, hits, stats))
                 return true;
         } else if (leaf_ray_by_ray<S, kAnyHit, kStats>(packs, leaf, c, entering[c], rays, soa, shears, active, hits,
                                                        stats)) {
@@ -332,8 +337,10 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
     if constexpr (!kAnyHit)
         for (uint32_t i = 0; i < count; ++i) hits[i] = Hit{};
     const WatertightRay first_shear(rays[0]);
-    PacketShears shears(first_shear, all_dominant_on<S>(soa, padded_count, first_shear.kz));
-    if (shears.same_axes) shear_packet<S>(soa, padded_count, shears.kx, shears.ky, shears.kz);
+    const PacketShearAxes axes{first_shear.kx, first_shear.ky, first_shear.kz,
+                               all_dominant_on<S>(soa, padded_count, first_shear.kz)};
+    if (axes.shared) shear_packet<S>(soa, padded_count, axes.kx, axes.ky, axes.kz);
+    LazyShears shears;
 
     ActivePacketRays<L> active(count);
     // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
@@ -344,8 +351,8 @@ bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays,
         if (current.count == 0) {
             if (enter_packet_node<S, kAnyHit, kStats>(layout, soa, frustum, active, current, stack, top, stats))
                 continue;
-        } else if (trace_packet_leaf<S, kAnyHit, kStats>(layout, current, rays, soa, frustum, shears, active, hits,
-                                                         stats)) {
+        } else if (trace_packet_leaf<S, kAnyHit, kStats>(layout, current, rays, soa, frustum, axes, shears, active,
+                                                         hits, stats)) {
             active.write_occlusion(occluded, count);  // every ray is blocked
             return true;
         }
