@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-"""The table of bench/ab_binaries.sh: per scene and ray kind (random and diffuse rays, closest hit and
-occlusion), the median over repetitions of our row's speed / Embree HIGH's own kernel's speed in the
+"""The table of bench/ab_binaries.sh: per scene and ray kind (random, primary and diffuse rays, closest
+hit and occlusion), the median over repetitions of our row's speed / Embree HIGH's own kernel's speed in the
 same process, for binary A and binary B, and B / A of those medians."""
 
 import collections
@@ -10,7 +10,7 @@ import statistics
 import sys
 from pathlib import Path
 
-KINDS = [(kind, query) for kind in ("random", "diffuse") for query in ("closest", "occlusion")]
+KINDS = [(kind, query) for kind in ("random", "primary", "diffuse") for query in ("closest", "occlusion")]
 
 
 def ratios(path: Path) -> dict:

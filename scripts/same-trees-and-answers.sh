@@ -2,11 +2,14 @@
 # SPDX-License-Identifier: MIT
 # Two builds of the CLI (say main before and after a refactoring) against each other: for each
 # scene and builder, `build --json` must give the same tree (nodes, references, depth, bytes, SAH;
-# times excepted) and the same tree file, byte for byte, and `trace` byte-identical hit files, closest hit and occlusion, under the binary
-# and the default wide kernel, on random and diffuse rays made once by the first CLI.
+# times excepted) and the same tree file, byte for byte, and `trace` byte-identical hit files, closest
+# hit and occlusion, under the binary, the default wide and both packet kernels, on random, diffuse
+# and primary rays made once by the first CLI (primary rays are the ones packets trace as packets; on
+# the others they test the packet kernels' fallbacks).
 # Usage: scripts/same-trees-and-answers.sh OLD_CLI NEW_CLI [SCENE ...]
 # Scenes default to four of the shared scenes ($SPACEBVH_SCENES, default ../shared/scenes);
-# BUILDERS (default "cbvh binned spatial sbvh kdbvh") and RAYS (default 100000) may be set.
+# BUILDERS (default "cbvh binned spatial sbvh kdbvh"), KERNELS (default "binary bvh8 packet8 packet16"),
+# KINDS (default "random diffuse primary") and RAYS (default 100000) may be set.
 set -euo pipefail
 old=$(realpath "$1") new=$(realpath "$2")
 shift 2
@@ -16,6 +19,8 @@ if [ $# -eq 0 ]; then
     "$scenes_dir"/coffee_maker/coffee_maker.obj "$scenes_dir"/crytek_sponza/crytek_sponza.obj
 fi
 builders=${BUILDERS:-cbvh binned spatial sbvh kdbvh}
+kernels=${KERNELS:-binary bvh8 packet8 packet16}
+kinds=${KINDS:-random diffuse primary}
 rays=${RAYS:-100000}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -35,7 +40,7 @@ print(json.dumps(clean(d), sort_keys=True, indent=1))' "$1"
 differences=0 checks=0
 for scene in "$@"; do
   stem=$(basename "$scene" | sed 's/\.[^.]*$//')
-  for kind in random diffuse; do
+  for kind in $kinds; do
     "$old" rays "$scene" -q --kind "$kind" -n "$rays" --width 256 --height 256 -o "$work/$stem.$kind.rays" >/dev/null
   done
   for builder in $builders; do
@@ -49,8 +54,8 @@ for scene in "$@"; do
       echo "DIFFERENT TREE: $stem $builder"; diff "$work/old.tree.txt" "$work/new.tree.txt" | head -20
       differences=$((differences + 1))
     fi
-    for kind in random diffuse; do
-      for kernel in binary bvh8; do
+    for kind in $kinds; do
+      for kernel in $kernels; do
         for query in closest occlusion; do
           flag=(); [ "$query" = occlusion ] && flag=(--occlusion)
           for side in old new; do

@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/install-test-tools.sh
 bash scripts/check-format.sh
+python3 scripts/check-sizes.py
 python3 scripts/check-design-map.py
 bash scripts/build.sh
 (cd build && ctest -j "$(nproc)" --output-on-failure --timeout 900)

@@ -12,16 +12,63 @@ namespace spacebvh::cli {
 
 using namespace spacebvh::tools;
 
+namespace {
+
+struct TraceOptions {
+    std::string source, rays_path, hits_path, kernel = "auto";
+    bool occlusion = false, stats = false;
+    SceneOptions scene;
+    BuildCliOptions build;
+    CommonOptions common;
+    TreeOption tree;
+};
+
+// The answers to a ray file as hit records, and what tracing them took.
+struct TracedRays {
+    std::vector<HitRecord> records;
+    size_t hit_count = 0;
+    double trace_ms = 0;
+    TraversalStats stats;  // counted only when asked for
+};
+
+TracedRays trace_rays(const Tracer& tracer, const std::vector<Ray>& rays, bool occlusion, bool with_stats) {
+    TracedRays traced;
+    TraversalStats* stats_out = with_stats ? &traced.stats : nullptr;
+    traced.records.resize(rays.size());
+    const auto start = std::chrono::steady_clock::now();
+    if (occlusion) {
+        std::vector<uint8_t> occluded(rays.size());
+        tracer.occluded(rays, occluded, stats_out);
+        for (size_t i = 0; i < rays.size(); ++i) traced.records[i] = occlusion_record(occluded[i]);
+    } else {
+        std::vector<Hit> hits(rays.size());
+        tracer.intersect(rays, hits, stats_out);
+        for (size_t i = 0; i < rays.size(); ++i) traced.records[i] = to_record(hits[i]);
+    }
+    traced.trace_ms = milliseconds_since(start);
+    for (const HitRecord& record : traced.records) traced.hit_count += record.is_hit();
+    return traced;
+}
+
+// The work per ray (--stats), printed and added to `json`.
+void report_work_per_ray(const TraversalStats& stats, size_t ray_count, nlohmann::json& json) {
+    const double n = double(ray_count);
+    std::printf("per ray: %.2f nodes visited, %.2f triangles tested\n", double(stats.nodes_visited) / n,
+                double(stats.triangles_tested) / n);
+    json["nodes_per_ray"] = double(stats.nodes_visited) / n;
+    json["triangles_per_ray"] = double(stats.triangles_tested) / n;
+    if (stats.exact_tests || stats.plane_distances) {
+        std::printf("per ray: %.4f exact tests, %.4f double-precision distances\n", double(stats.exact_tests) / n,
+                    double(stats.plane_distances) / n);
+        json["exact_tests_per_ray"] = double(stats.exact_tests) / n;
+        json["plane_distances_per_ray"] = double(stats.plane_distances) / n;
+    }
+}
+
+}  // namespace
+
 void add_trace_command(CLI::App& app) {
-    struct Options {
-        std::string source, rays_path, hits_path, kernel = "auto";
-        bool occlusion = false, stats = false;
-        SceneOptions scene;
-        BuildCliOptions build;
-        CommonOptions common;
-        TreeOption tree;
-    };
-    auto options = std::make_shared<Options>();
+    auto options = std::make_shared<TraceOptions>();
     CLI::App* command = app.add_subcommand("trace", "trace a ray file and write a hit file (closest hit or occlusion)");
     command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
     command->add_option("--rays", options->rays_path, "ray file (REFRAYS1)")->required();
@@ -41,49 +88,21 @@ void add_trace_command(CLI::App& app) {
         double tree_ms = 0;
         const Bvh bvh = tree_for(options->tree, scene, build_options, &tree_ms);
         const CostModel& cost = options->tree.given() ? bvh.cost : build_options.cost;
-        const std::unique_ptr<Tracer> tracer_pointer = make_tracer(options->kernel, scene, bvh);
-        const Tracer& tracer = *tracer_pointer;
-        TraversalStats stats;
-        TraversalStats* stats_out = options->stats ? &stats : nullptr;
-        std::vector<HitRecord> records(rays.size());
-        size_t hit_count = 0;
-        const auto start = std::chrono::steady_clock::now();
-        if (options->occlusion) {
-            std::vector<uint8_t> occluded(rays.size());
-            tracer.occluded(rays, occluded, stats_out);
-            for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
-        } else {
-            std::vector<Hit> hits(rays.size());
-            tracer.intersect(rays, hits, stats_out);
-            for (size_t i = 0; i < rays.size(); ++i) records[i] = to_record(hits[i]);
-        }
-        const double trace_ms = milliseconds_since(start);
-        for (const HitRecord& record : records) hit_count += record.is_hit();
-        write_hit_file(options->hits_path, records);
+        const std::unique_ptr<Tracer> tracer = make_tracer(options->kernel, scene, bvh);
+        const TracedRays traced = trace_rays(*tracer, rays, options->occlusion, options->stats);
+        write_hit_file(options->hits_path, traced.records);
         std::printf("%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), builder %s (%s), kernel %s\n", rays.size(),
-                    hit_count, options->occlusion ? "occluded" : "hits", trace_ms,
-                    double(rays.size()) / trace_ms / 1000.0, options->common.effective_threads(), bvh.builder.c_str(),
-                    cost.describe().c_str(), tracer.name().c_str());
+                    traced.hit_count, options->occlusion ? "occluded" : "hits", traced.trace_ms,
+                    double(rays.size()) / traced.trace_ms / 1000.0, options->common.effective_threads(),
+                    bvh.builder.c_str(), cost.describe().c_str(), tracer->name().c_str());
         if (options->tree.given()) std::printf("tree loaded from %s in %.1f ms\n", options->tree.path.c_str(), tree_ms);
         nlohmann::json json = {{"rays", rays.size()},
-                               {"hits", hit_count},
-                               {"trace_ms", trace_ms},
+                               {"hits", traced.hit_count},
+                               {"trace_ms", traced.trace_ms},
                                {"builder", bvh.builder},
-                               {"kernel", tracer.name()}};
+                               {"kernel", tracer->name()}};
         json[options->tree.given() ? "tree_load_ms" : "build_ms"] = tree_ms;
-        if (options->stats && !rays.empty()) {
-            const double n = double(rays.size());
-            std::printf("per ray: %.2f nodes visited, %.2f triangles tested\n", double(stats.nodes_visited) / n,
-                        double(stats.triangles_tested) / n);
-            json["nodes_per_ray"] = double(stats.nodes_visited) / n;
-            json["triangles_per_ray"] = double(stats.triangles_tested) / n;
-            if (stats.exact_tests || stats.plane_distances) {
-                std::printf("per ray: %.4f exact tests, %.4f double-precision distances\n",
-                            double(stats.exact_tests) / n, double(stats.plane_distances) / n);
-                json["exact_tests_per_ray"] = double(stats.exact_tests) / n;
-                json["plane_distances_per_ray"] = double(stats.plane_distances) / n;
-            }
-        }
+        if (options->stats && !rays.empty()) report_work_per_ray(traced.stats, rays.size(), json);
         write_json(options->common.json_path, json);
     });
 }

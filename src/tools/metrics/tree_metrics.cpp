@@ -73,6 +73,129 @@ void for_each_reachable(const Bvh& bvh, Visit&& visit) {
     }
 }
 
+// Pre-order numbering of the reachable nodes: node m is in n's subtree iff
+// order[n] <= order[m] <= last[n]. `reachable` lists the nodes in that order.
+struct PreOrder {
+    std::vector<uint32_t> order, last, reachable;
+
+    explicit PreOrder(const Bvh& bvh) : order(bvh.nodes.size(), kInvalidIndex), last(bvh.nodes.size(), 0) {
+        reachable.reserve(bvh.nodes.size());
+        for_each_reachable(bvh, [&](uint32_t index, uint32_t) {
+            order[index] = uint32_t(reachable.size());
+            reachable.push_back(index);
+        });
+        // Pre-order lists parents before children, so a backward sweep finishes children first.
+        for (size_t i = reachable.size(); i-- > 0;) {
+            uint32_t index = reachable[i];
+            const BvhNode& node = bvh.nodes[index];
+            last[index] = node.is_leaf() ? order[index] : std::max(last[node.first], last[node.first + 1]);
+        }
+    }
+};
+
+// For each triangle, the pre-order numbers of the leaves that reference it (CSR), so that
+// "t in Q(n)" is a range test. Only consulted for triangles referenced more than once.
+struct ReferencingLeaves {
+    std::vector<uint32_t> offsets, orders;
+
+    ReferencingLeaves(const Bvh& bvh, const PreOrder& pre_order, size_t triangle_count)
+        : offsets(triangle_count + 1, 0) {
+        for (uint32_t index : pre_order.reachable) {
+            const BvhNode& node = bvh.nodes[index];
+            if (!node.is_leaf()) continue;
+            for (uint32_t k = 0; k < node.reference_count; ++k) ++offsets[bvh.primitives[node.first + k] + 1];
+        }
+        for (size_t t = 0; t < triangle_count; ++t) offsets[t + 1] += offsets[t];
+        orders.resize(offsets.back());
+        std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+        for (uint32_t index : pre_order.reachable) {
+            const BvhNode& node = bvh.nodes[index];
+            if (!node.is_leaf()) continue;
+            for (uint32_t k = 0; k < node.reference_count; ++k) {
+                orders[fill[bvh.primitives[node.first + k]]++] = pre_order.order[index];
+            }
+        }
+    }
+    uint32_t references(uint32_t triangle) const { return offsets[triangle + 1] - offsets[triangle]; }
+    bool in_subtree(uint32_t triangle, uint32_t node, const PreOrder& pre_order) const {
+        for (uint32_t i = offsets[triangle]; i < offsets[triangle + 1]; ++i) {
+            if (orders[i] >= pre_order.order[node] && orders[i] <= pre_order.last[node]) return true;
+        }
+        return false;
+    }
+};
+
+// Triangle boxes in leaf-slot order, so that the common rejection (a leaf triangle whose box
+// misses n's box) reads memory sequentially instead of gathering vertices.
+std::vector<AABB> bounds_by_slot(const Scene& scene, const Bvh& bvh) {
+    std::vector<AABB> slot_bounds(bvh.primitives.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, slot_bounds.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              slot_bounds[i] = scene.triangles[bvh.primitives[i]].bounds();
+                      });
+    return slot_bounds;
+}
+
+// What a thread reuses from node to node.
+struct EpoScratch {
+    std::vector<uint32_t> stamp;  // stamp[t] == epoch: triangle t already handled for this node
+    uint32_t epoch = 0;
+    std::vector<uint32_t> stack;
+};
+
+// Everything tree_epo precomputes once for every node's term.
+struct EpoTables {
+    const Scene& scene;
+    const Bvh& bvh;
+    std::vector<double> areas;
+    PreOrder pre_order;
+    ReferencingLeaves leaves;
+    std::vector<AABB> slot_bounds;
+};
+
+// A((S \ Q(n)) ∩ n) of node n: the tree traversed with n's box, n's own subtree skipped, every leaf
+// triangle found clipped to the box unless it is also referenced inside the subtree.
+double area_outside_subtree(const EpoTables& tables, uint32_t n, EpoScratch& s) {
+    const Bvh& bvh = tables.bvh;
+    const AABB& box = bvh.nodes[n].bounds;
+    if (++s.epoch == 0) {  // wrapped: clear the stamps once
+        std::fill(s.stamp.begin(), s.stamp.end(), 0);
+        s.epoch = 1;
+    }
+    double area = 0.0;
+    s.stack.clear();
+    s.stack.push_back(0);
+    while (!s.stack.empty()) {
+        uint32_t m = s.stack.back();
+        s.stack.pop_back();
+        if (m == n) continue;  // n's own subtree is Q(n)
+        const BvhNode& other = bvh.nodes[m];
+        if (!boxes_overlap(other.bounds, box)) continue;
+        if (!other.is_leaf()) {
+            s.stack.push_back(other.first + 1);
+            s.stack.push_back(other.first);
+            continue;
+        }
+        for (uint32_t slot = other.first; slot < other.first + other.reference_count; ++slot) {
+            const AABB& triangle_box = tables.slot_bounds[slot];
+            if (!boxes_overlap(triangle_box, box)) continue;
+            uint32_t t = bvh.primitives[slot];
+            // Referenced once: met only here, and that reference is outside n's subtree, so t is not
+            // in Q(n). Referenced more often: count it once, and only if no reference lies inside
+            // n's subtree.
+            if (tables.leaves.references(t) > 1) {
+                if (s.stamp[t] == s.epoch) continue;
+                s.stamp[t] = s.epoch;
+                if (tables.leaves.in_subtree(t, n, tables.pre_order)) continue;
+            }
+            area +=
+                box.contains(triangle_box) ? tables.areas[t] : clipped_triangle_area(tables.scene.triangles[t], box);
+        }
+    }
+    return area;
+}
+
 }  // namespace
 
 double tree_sah(const Bvh& bvh, const CostModel& cost) {
@@ -96,8 +219,6 @@ double tree_sah(const Bvh& bvh, const CostModel& cost) {
 double tree_epo(const Scene& scene, const Bvh& bvh, const CostModel& cost) {
     if (bvh.empty() || scene.triangles.empty()) return 0.0;
     const size_t triangle_count = scene.triangles.size();
-    const size_t node_count = bvh.nodes.size();
-
     std::vector<double> areas(triangle_count);
     double total_area = 0.0;
     for (size_t t = 0; t < triangle_count; ++t) {
@@ -105,113 +226,24 @@ double tree_epo(const Scene& scene, const Bvh& bvh, const CostModel& cost) {
         total_area += areas[t];
     }
     if (total_area <= 0.0) return 0.0;
+    PreOrder pre_order(bvh);
+    ReferencingLeaves leaves(bvh, pre_order, triangle_count);
+    const EpoTables tables{
+        scene, bvh, std::move(areas), std::move(pre_order), std::move(leaves), bounds_by_slot(scene, bvh)};
 
-    // Pre-order numbering of reachable nodes: node m is in n's subtree iff
-    // order[n] <= order[m] <= last[n].
-    std::vector<uint32_t> order(node_count, kInvalidIndex), last(node_count, 0);
-    std::vector<uint32_t> reachable;
-    reachable.reserve(node_count);
-    {
-        // Pre-order lists parents before children, so a backward sweep finishes children first.
-        for_each_reachable(bvh, [&](uint32_t index, uint32_t) {
-            order[index] = uint32_t(reachable.size());
-            reachable.push_back(index);
-        });
-        for (size_t i = reachable.size(); i-- > 0;) {
-            uint32_t index = reachable[i];
-            const BvhNode& node = bvh.nodes[index];
-            last[index] = node.is_leaf() ? order[index] : std::max(last[node.first], last[node.first + 1]);
-        }
-    }
-
-    // For each triangle, the pre-order numbers of the leaves that reference it (CSR), so that
-    // "t in Q(n)" is a range test. Only consulted for triangles referenced more than once.
-    std::vector<uint32_t> leaf_offsets(triangle_count + 1, 0);
-    for (uint32_t index : reachable) {
-        const BvhNode& node = bvh.nodes[index];
-        if (!node.is_leaf()) continue;
-        for (uint32_t k = 0; k < node.reference_count; ++k) ++leaf_offsets[bvh.primitives[node.first + k] + 1];
-    }
-    for (size_t t = 0; t < triangle_count; ++t) leaf_offsets[t + 1] += leaf_offsets[t];
-    std::vector<uint32_t> leaf_orders(leaf_offsets.back());
-    {
-        std::vector<uint32_t> fill(leaf_offsets.begin(), leaf_offsets.end() - 1);
-        for (uint32_t index : reachable) {
-            const BvhNode& node = bvh.nodes[index];
-            if (!node.is_leaf()) continue;
-            for (uint32_t k = 0; k < node.reference_count; ++k) {
-                leaf_orders[fill[bvh.primitives[node.first + k]]++] = order[index];
-            }
-        }
-    }
-    // Triangle boxes in leaf-slot order, so that the common rejection (a leaf triangle whose box
-    // misses n's box) reads memory sequentially instead of gathering vertices.
-    std::vector<AABB> slot_bounds(bvh.primitives.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, slot_bounds.size(), 4096),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i != r.end(); ++i)
-                              slot_bounds[i] = scene.triangles[bvh.primitives[i]].bounds();
-                      });
-    auto in_subtree = [&](uint32_t triangle, uint32_t node) {
-        for (uint32_t i = leaf_offsets[triangle]; i < leaf_offsets[triangle + 1]; ++i) {
-            if (leaf_orders[i] >= order[node] && leaf_orders[i] <= last[node]) return true;
-        }
-        return false;
-    };
-
-    struct Scratch {
-        std::vector<uint32_t> stamp;  // stamp[t] == epoch: triangle t already handled for this node
-        uint32_t epoch = 0;
-        std::vector<uint32_t> stack;
-    };
-    tbb::enumerable_thread_specific<Scratch> scratch;
-
+    tbb::enumerable_thread_specific<EpoScratch> scratch;
+    const std::vector<uint32_t>& reachable = tables.pre_order.reachable;
     std::vector<double> contribution(reachable.size(), 0.0);
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, reachable.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-            Scratch& s = scratch.local();
+            EpoScratch& s = scratch.local();
             if (s.stamp.size() != triangle_count) s.stamp.assign(triangle_count, 0);
             for (size_t i = range.begin(); i != range.end(); ++i) {
-                const uint32_t n = reachable[i];
-                const BvhNode& node = bvh.nodes[n];
-                const AABB& box = node.bounds;
-                if (box.is_empty()) continue;
-                if (++s.epoch == 0) {  // wrapped: clear the stamps once
-                    std::fill(s.stamp.begin(), s.stamp.end(), 0);
-                    s.epoch = 1;
-                }
-                double area = 0.0;
-                s.stack.clear();
-                s.stack.push_back(0);
-                while (!s.stack.empty()) {
-                    uint32_t m = s.stack.back();
-                    s.stack.pop_back();
-                    if (m == n) continue;  // n's own subtree is Q(n)
-                    const BvhNode& other = bvh.nodes[m];
-                    if (!boxes_overlap(other.bounds, box)) continue;
-                    if (!other.is_leaf()) {
-                        s.stack.push_back(other.first + 1);
-                        s.stack.push_back(other.first);
-                        continue;
-                    }
-                    for (uint32_t slot = other.first; slot < other.first + other.reference_count; ++slot) {
-                        const AABB& triangle_box = slot_bounds[slot];
-                        if (!boxes_overlap(triangle_box, box)) continue;
-                        uint32_t t = bvh.primitives[slot];
-                        // Referenced once: met only here, and that reference is outside n's subtree, so t
-                        // is not in Q(n). Referenced more often: count it once, and only if no reference
-                        // lies inside n's subtree.
-                        if (leaf_offsets[t + 1] - leaf_offsets[t] > 1) {
-                            if (s.stamp[t] == s.epoch) continue;
-                            s.stamp[t] = s.epoch;
-                            if (in_subtree(t, n)) continue;
-                        }
-                        area += box.contains(triangle_box) ? areas[t] : clipped_triangle_area(scene.triangles[t], box);
-                    }
-                }
+                const BvhNode& node = bvh.nodes[reachable[i]];
+                if (node.bounds.is_empty()) continue;
                 double weight = node.is_leaf() ? double(cost.intersection_cost) * double(distinct_in_leaf(bvh, node))
                                                : double(cost.traversal_cost);
-                contribution[i] = weight * area;
+                contribution[i] = weight * area_outside_subtree(tables, reachable[i], s);
             }
         });
 

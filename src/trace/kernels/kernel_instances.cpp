@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
-// Every kernel, compiled once per instruction set: wide_kernel.inl (single rays) and
-// packet_kernel.inl (packets) are included into one namespace per node-test policy, under
-// `#pragma GCC target` for AVX2 and AVX-512, so a portable build still runs the widest instructions
-// the CPU reports (chosen at run time). Functions outside the pragma regions (the scalar triangle test
-// and the exact fallback) keep the default target; inlining them into a wider target is allowed.
+// Every kernel, compiled once per instruction set: wide_kernel.inl (single rays), packet_rays.inl and
+// packet_kernel.inl (packets: their lane tests, their traversal) are included into one namespace per
+// node-test policy, under `#pragma GCC target` for AVX2 and AVX-512, so a portable build still runs
+// the widest instructions the CPU reports (chosen at run time). Functions outside the pragma regions
+// (the scalar triangle test and the exact fallback) keep the default target; inlining them into a
+// wider target is allowed.
 #include <immintrin.h>
 
 #include <cmath>
@@ -110,6 +111,7 @@ struct Policy {
     }
 };
 #include "trace/kernels/wide_kernel.inl"
+#include "trace/kernels/packet_rays.inl"
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace scalar_kernels
@@ -144,6 +146,7 @@ struct SseOperations {
 namespace sse_kernels {
 struct Policy : SseOperations {};
 #include "trace/kernels/wide_kernel.inl"
+#include "trace/kernels/packet_rays.inl"
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace sse_kernels
@@ -189,6 +192,7 @@ struct Avx2Operations {
 namespace avx2_kernels {
 struct Policy : Avx2Operations {};
 #include "trace/kernels/wide_kernel.inl"
+#include "trace/kernels/packet_rays.inl"
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace avx2_kernels
@@ -235,6 +239,7 @@ struct Policy<8> : Avx2Operations {
     }
 };
 #include "trace/kernels/wide_kernel.inl"
+#include "trace/kernels/packet_rays.inl"
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace avx512_kernels

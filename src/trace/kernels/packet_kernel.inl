@@ -16,271 +16,8 @@
 //   - packets whose rays do not share direction signs but fall in two sign octants are traced as one
 //     packet per octant; the rest (incoherent rays, zero direction components) go ray by ray.
 // Every ray-box and ray-triangle decision is lane by lane the single-ray kernel's (same answers, exactly).
-// Included by kernel_instances.cpp after wide_kernel.inl, inside a policy namespace.
-
-// The interval bounds of a packet: every ray's origin and inverse direction lie in these boxes.
-struct PacketFrustum {
-    float org_lo[3], org_hi[3], inv_lo[3], inv_hi[3];
-    int entry_plane[3], exit_plane[3];
-    float tmin_lo, tmax_hi;
-};
-
-// The rays of a packet in structure-of-arrays form, so the tests below run over S::kLanes rays at
-// once. Entries from `count` up to the next multiple of the lane count copy the first ray's origin
-// and direction (so bounds over whole chunks are the packet's own) with tmin = +inf, tmax = -inf:
-// they enter nothing.
-struct PacketRaysSoA {
-    alignas(64) float org[3][kMaxPacket];
-    alignas(64) float dir[3][kMaxPacket];
-    alignas(64) float inv_dir[3][kMaxPacket];
-    alignas(64) float tmin[kMaxPacket];
-    alignas(64) float tmax[kMaxPacket];
-    alignas(64) float shear_x[kMaxPacket];  // WatertightRay's, for the triangle test over rays
-    alignas(64) float shear_y[kMaxPacket];
-};
-
-// Rays base .. base + 7 into the SoA arrays. A Ray is eight floats (origin, direction, tmin, tmax),
-// so with 8-lane AVX the eight rays are an 8 x 8 transpose in registers (24 shuffles); the copy
-// field by field costs several times that, a large share of a packet of cheap rays.
-template <class S>
-[[gnu::always_inline]] inline void load_eight_rays(const Ray* rays, uint32_t base, PacketRaysSoA& soa) {
-    static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, dir) == 3 * sizeof(float) &&
-                  offsetof(Ray, tmin) == 6 * sizeof(float) && offsetof(Ray, tmax) == 7 * sizeof(float));
-    if constexpr (S::kLanes == 8 && !S::kScalarTriangles) {
-        const float* p = reinterpret_cast<const float*>(rays + base);
-        __m256 row[8];
-        for (int k = 0; k < 8; ++k) row[k] = _mm256_loadu_ps(p + 8 * k);
-        __m256 pair[8], quad[8];
-        for (int k = 0; k < 8; k += 2) {
-            pair[k] = _mm256_unpacklo_ps(row[k], row[k + 1]);
-            pair[k + 1] = _mm256_unpackhi_ps(row[k], row[k + 1]);
-        }
-        for (int k = 0; k < 8; k += 4) {
-            quad[k] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(1, 0, 1, 0));
-            quad[k + 1] = _mm256_shuffle_ps(pair[k], pair[k + 2], _MM_SHUFFLE(3, 2, 3, 2));
-            quad[k + 2] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(1, 0, 1, 0));
-            quad[k + 3] = _mm256_shuffle_ps(pair[k + 1], pair[k + 3], _MM_SHUFFLE(3, 2, 3, 2));
-        }
-        float* field[8] = {soa.org[0] + base, soa.org[1] + base, soa.org[2] + base, soa.dir[0] + base,
-                           soa.dir[1] + base, soa.dir[2] + base, soa.tmin + base,   soa.tmax + base};
-        for (int k = 0; k < 4; ++k) {
-            _mm256_store_ps(field[k], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x20));
-            _mm256_store_ps(field[k + 4], _mm256_permute2f128_ps(quad[k], quad[k + 4], 0x31));
-        }
-    } else {
-        for (uint32_t i = base; i < base + 8; ++i) {
-            for (int axis = 0; axis < 3; ++axis) {
-                soa.org[axis][i] = rays[i].org[axis];
-                soa.dir[axis][i] = rays[i].dir[axis];
-            }
-            soa.tmin[i] = rays[i].tmin;
-            soa.tmax[i] = rays[i].tmax;
-        }
-    }
-}
-
-// The smallest and largest lane of `values`.
-template <class S>
-[[gnu::always_inline]] inline void lane_range(typename S::F lo_values, typename S::F hi_values, float& lo, float& hi) {
-    alignas(64) float lo_lanes[S::kLanes], hi_lanes[S::kLanes];
-    S::store(lo_lanes, lo_values);
-    S::store(hi_lanes, hi_values);
-    lo = lo_lanes[0];
-    hi = hi_lanes[0];
-    for (int j = 1; j < S::kLanes; ++j) {
-        lo = std::min(lo, lo_lanes[j]);
-        hi = std::max(hi, hi_lanes[j]);
-    }
-}
-
-// False when the rays do not all share the sign of each direction component (or one is zero, or an
-// inverse direction is not finite): the entry and exit planes then differ between rays and the packet
-// goes ray by ray. Bounds are taken over whole chunks of S::kLanes rays (the padding copies ray 0).
-template <class S>
-inline bool make_frustum(const PacketRaysSoA& rays, uint32_t padded_count, PacketFrustum& frustum) {
-    using F = typename S::F;
-    constexpr uint32_t L = uint32_t(S::kLanes);
-    constexpr unsigned kAllLanes = (1u << L) - 1;
-    const F zero = S::set1(0.0f);
-    for (int axis = 0; axis < 3; ++axis) {
-        F org_lo = S::load(rays.org[axis]), org_hi = org_lo, inv_lo = S::load(rays.inv_dir[axis]), inv_hi = inv_lo;
-        unsigned negative = kAllLanes, positive = kAllLanes;
-        for (uint32_t base = 0; base < padded_count; base += L) {
-            const F org = S::load(rays.org[axis] + base), inv = S::load(rays.inv_dir[axis] + base);
-            const F dir = S::load(rays.dir[axis] + base);
-            negative &= S::less_mask(dir, zero);
-            positive &= S::less_mask(zero, dir);
-            org_lo = S::min(org_lo, org);
-            org_hi = S::max(org_hi, org);
-            inv_lo = S::min(inv_lo, inv);
-            inv_hi = S::max(inv_hi, inv);
-        }
-        if (negative != kAllLanes && positive != kAllLanes) return false;
-        lane_range<S>(org_lo, org_hi, frustum.org_lo[axis], frustum.org_hi[axis]);
-        lane_range<S>(inv_lo, inv_hi, frustum.inv_lo[axis], frustum.inv_hi[axis]);
-        if (!std::isfinite(frustum.inv_lo[axis]) || !std::isfinite(frustum.inv_hi[axis])) return false;
-        const bool is_negative = negative == kAllLanes;
-        frustum.entry_plane[axis] = 2 * axis + (is_negative ? 1 : 0);
-        frustum.exit_plane[axis] = 2 * axis + (is_negative ? 0 : 1);
-    }
-    F tmin_lo = S::load(rays.tmin), tmax_hi = S::load(rays.tmax);
-    for (uint32_t base = 0; base < padded_count; base += L) {
-        tmin_lo = S::min(tmin_lo, S::load(rays.tmin + base));
-        tmax_hi = S::max(tmax_hi, S::load(rays.tmax + base));
-    }
-    float unused;
-    lane_range<S>(tmin_lo, tmin_lo, frustum.tmin_lo, unused);
-    lane_range<S>(tmax_hi, tmax_hi, unused, frustum.tmax_hi);
-    return true;
-}
-
-// Whether every ray's largest direction component is on axis `kz` (dominant_axis: ties to the lower
-// axis), so all share the watertight test's shear axes.
-template <class S>
-inline bool all_dominant_on(const PacketRaysSoA& rays, uint32_t padded_count, int kz) {
-    using F = typename S::F;
-    constexpr uint32_t L = uint32_t(S::kLanes);
-    constexpr unsigned kAllLanes = (1u << L) - 1;
-    for (uint32_t base = 0; base < padded_count; base += L) {
-        const F x = S::abs(S::load(rays.dir[0] + base)), y = S::abs(S::load(rays.dir[1] + base)),
-                z = S::abs(S::load(rays.dir[2] + base));
-        bool same;
-        if (kz == 0)
-            same = (S::less_mask(x, y) | S::less_mask(x, z)) == 0;  // x >= y and x >= z
-        else if (kz == 1)
-            same = S::less_mask(x, y) == kAllLanes && S::less_mask(y, z) == 0;  // y > x, y >= z
-        else
-            same = (S::less_mask(x, z) & S::less_mask(y, z)) == kAllLanes;  // z > x and z > y
-        if (!same) return false;
-    }
-    return true;
-}
-
-// Bit i set unless child i is certainly missed by every ray of the packet. Each ray's slab distance
-// (p - o) * inv is bilinear in (o, inv), so over the packet it lies between the smallest and largest of
-// the four corner products; the bounds are then widened by 2^-18 relative, far more than the rounding
-// of either computation (and than kFarScale), so culling is conservative.
-template <class S>
-[[gnu::always_inline]] inline unsigned frustum_mask(const WideNode<S::kLanes>& node, const PacketFrustum& frustum) {
-    using F = typename S::F;
-    F lower = S::set1(frustum.tmin_lo), upper = S::set1(frustum.tmax_hi);
-    for (int axis = 0; axis < 3; ++axis) {
-        const F inv_lo = S::set1(frustum.inv_lo[axis]), inv_hi = S::set1(frustum.inv_hi[axis]);
-        const F org_lo = S::set1(frustum.org_lo[axis]), org_hi = S::set1(frustum.org_hi[axis]);
-        const F entry = S::load(node.planes[frustum.entry_plane[axis]]);
-        const F entry_near = S::sub(entry, org_hi), entry_far = S::sub(entry, org_lo);
-        const F entry_min = S::min(S::min(S::mul(entry_near, inv_lo), S::mul(entry_near, inv_hi)),
-                                   S::min(S::mul(entry_far, inv_lo), S::mul(entry_far, inv_hi)));
-        const F exit = S::load(node.planes[frustum.exit_plane[axis]]);
-        const F exit_near = S::sub(exit, org_hi), exit_far = S::sub(exit, org_lo);
-        const F exit_max = S::max(S::max(S::mul(exit_near, inv_lo), S::mul(exit_near, inv_hi)),
-                                  S::max(S::mul(exit_far, inv_lo), S::mul(exit_far, inv_hi)));
-        lower = S::max(entry_min, lower);
-        upper = S::min(exit_max, upper);
-    }
-    const F grow = S::set1(1.0f + 0x1p-18f), shrink = S::set1(1.0f - 0x1p-18f);
-    const F lower_widened = S::min(S::mul(lower, grow), S::mul(lower, shrink));
-    const F upper_widened = S::max(S::mul(upper, grow), S::mul(upper, shrink));
-    return S::hit_mask(lower_widened, upper_widened);
-}
-
-// The edge functions of one triangle (a lane of a TrianglePack) for S::kLanes rays that share the
-// shear's axes kx, ky, kz: pack_edges with the roles of rays and triangles swapped, lane by lane the
-// same float operations, so each lane decides exactly as the single-ray test would.
-template <class S>
-[[gnu::always_inline]] inline void edges_over_rays(const TrianglePack& pack, int lane, const PacketRaysSoA& rays,
-                                                   uint32_t base, int kx, int ky, int kz, float* u_out, float* v_out,
-                                                   float* w_out, unsigned& outside, unsigned& inside) {
-    using F = typename S::F;
-    const F org_x = S::load(rays.org[kx] + base), org_y = S::load(rays.org[ky] + base),
-            org_z = S::load(rays.org[kz] + base);
-    const F shear_x = S::load(rays.shear_x + base), shear_y = S::load(rays.shear_y + base);
-    F sheared_x[3], sheared_y[3], magnitude = S::set1(0.0f), size = S::set1(0.0f);
-    for (int k = 0; k < 3; ++k) {
-        const F px = S::sub(S::set1(pack.vertex[k][kx][lane]), org_x);
-        const F py = S::sub(S::set1(pack.vertex[k][ky][lane]), org_y);
-        const F pz = S::sub(S::set1(pack.vertex[k][kz][lane]), org_z);
-        const F shift_x = S::mul(shear_x, pz), shift_y = S::mul(shear_y, pz);
-        sheared_x[k] = S::sub(px, shift_x);
-        sheared_y[k] = S::sub(py, shift_y);
-        const F vertex_magnitude = S::max(S::add(S::abs(px), S::abs(shift_x)), S::add(S::abs(py), S::abs(shift_y)));
-        magnitude = S::max(magnitude, vertex_magnitude);
-        size = S::max(size, S::max(S::abs(sheared_x[k]), S::abs(sheared_y[k])));
-    }
-    const F ax = sheared_x[0], ay = sheared_y[0], bx = sheared_x[1], by = sheared_y[1], cx = sheared_x[2],
-            cy = sheared_y[2];
-    const F u = S::sub(S::mul(cx, by), S::mul(cy, bx));
-    const F v = S::sub(S::mul(ax, cy), S::mul(ay, cx));
-    const F w = S::sub(S::mul(bx, ay), S::mul(by, ax));
-    const F bound = S::add(S::mul(S::mul(S::set1(32.0f * 0x1p-24f), magnitude), size), S::set1(kUnderflowBound));
-    const F negative_bound = S::sub(S::set1(0.0f), bound);
-    const unsigned u_below = S::less_mask(u, negative_bound), v_below = S::less_mask(v, negative_bound),
-                   w_below = S::less_mask(w, negative_bound);
-    const unsigned u_above = S::less_mask(bound, u), v_above = S::less_mask(bound, v), w_above = S::less_mask(bound, w);
-    outside = (u_below | v_below | w_below) & (u_above | v_above | w_above);
-    inside = (u_above & v_above & w_above) | (u_below & v_below & w_below);
-    S::store(u_out, u);
-    S::store(v_out, v);
-    S::store(w_out, w);
-}
-
-// Bit j set when ray base + j enters child `slot` of `node` within its [tmin, tmax]: for S::kLanes
-// rays, each lane the operations of that child's lane in enter_children, in the same order (a NaN slab
-// distance keeps the running bound; the exit distance widened by kFarScale; the rays of a packet share
-// their entry and exit planes), so it never disagrees with the ray's own node test.
-template <class S>
-[[gnu::always_inline]] inline unsigned rays_entering_child(const WideNode<S::kLanes>& node, uint32_t slot,
-                                                           const PacketRaysSoA& rays, uint32_t base,
-                                                           const PacketFrustum& frustum, float* entry = nullptr) {
-    using F = typename S::F;
-    F near = S::load(rays.tmin + base), far = S::load(rays.tmax + base);
-    for (int axis = 0; axis < 3; ++axis) {
-        const F org = S::load(rays.org[axis] + base), inv_dir = S::load(rays.inv_dir[axis] + base);
-        const F t_entry = S::mul(S::sub(S::set1(node.planes[frustum.entry_plane[axis]][slot]), org), inv_dir);
-        const F t_exit = S::mul(S::sub(S::set1(node.planes[frustum.exit_plane[axis]][slot]), org), inv_dir);
-        near = S::max(t_entry, near);
-        far = S::min(t_exit, far);
-    }
-    const F tmax = S::load(rays.tmax + base);
-    if (entry) S::store(entry, near);
-    return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
-}
-
-// Four doubles (GCC and Clang vector extensions: AVX registers where the target has them).
-typedef double Double4 __attribute__((vector_size(32)));
-[[gnu::always_inline]] inline Double4 widened(const float* p) {
-    typedef float Float4 __attribute__((vector_size(16)));
-    Float4 f;
-    __builtin_memcpy(&f, p, sizeof(f));
-    return __builtin_convertvector(f, Double4);
-}
-
-// finish_crossing (watertight_triangle.hpp) for the S::kLanes rays from `base` at once: the same
-// double operations lane by lane (plane_hit_distance's, the triangle's normal made once), so the same
-// distances and the same decisions, four lanes per vector. Returns the lanes of `crossing` whose
-// distance lies in the ray's [tmin, tmax]; their distances in `t` (other lanes may be left unset).
-template <class S>
-[[gnu::always_inline]] inline unsigned crossings_in_range(const Vec3 vertex[3], const PacketRaysSoA& rays,
-                                                          uint32_t base, unsigned crossing, double* t) {
-    const Vec3 &v0 = vertex[0], &v1 = vertex[1], &v2 = vertex[2];
-    const double e1x = double(v1.x) - v0.x, e1y = double(v1.y) - v0.y, e1z = double(v1.z) - v0.z;
-    const double e2x = double(v2.x) - v0.x, e2y = double(v2.y) - v0.y, e2z = double(v2.z) - v0.z;
-    const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
-    unsigned in_range = 0;
-    for (int j = 0; j < S::kLanes; j += 4) {
-        if (!((crossing >> j) & 15u)) continue;  // no lane of these four to decide
-        const uint32_t i = base + uint32_t(j);
-        const Double4 px = double(v0.x) - widened(rays.org[0] + i), py = double(v0.y) - widened(rays.org[1] + i),
-                      pz = double(v0.z) - widened(rays.org[2] + i);
-        const Double4 distance =
-            (nx * px + ny * py + nz * pz) /
-            (nx * widened(rays.dir[0] + i) + ny * widened(rays.dir[1] + i) + nz * widened(rays.dir[2] + i));
-        const auto inside = (distance >= widened(rays.tmin + i)) & (distance <= widened(rays.tmax + i));
-        __builtin_memcpy(t + j, &distance, sizeof(distance));
-        for (int k = 0; k < 4; ++k) in_range |= unsigned(inside[k] != 0) << (j + k);
-    }
-    return in_range & crossing;
-}
+// Included by kernel_instances.cpp after wide_kernel.inl and packet_rays.inl (the lane tests), inside
+// a policy namespace.
 
 // The rays of a packet still looking for an answer, L per chunk (bit j of chunk c: ray c * L + j):
 // an occlusion ray leaves once it is blocked, and the packet ends once none is left; closest-hit
@@ -332,243 +69,293 @@ struct PacketRay {
     typename S::F inv_dir(int axis) const { return S::set1(inv_dir_scalar[axis]); }
 };
 
+// A subtree pending on a packet's stack. `first`: the first ray known to enter it; `parent`, `slot`:
+// the node whose child it is, so the packet's later rays can test a leaf's box.
+struct PacketStackEntry {
+    uint32_t child, count, first, parent, slot;
+};
+
+// The shear axes of the watertight triangle test (WatertightRay's kx, ky, kz) when every ray of the
+// packet shears along the first ray's (`shared`): then a leaf most of a chunk's rays enter tests one
+// triangle against S::kLanes rays, the shears kept in the SoA arrays (shear_packet). Passed by value:
+// plain values, which no store through `hits` can change, stay in registers.
+struct PacketShearAxes {
+    int kx, ky, kz;
+    bool shared;
+};
+
+// The WatertightRay of each ray that tests a leaf on its own, made when it first does: most rays of
+// most packets never need one.
+struct LazyShears {
+    union LazyShear {
+        WatertightRay shear;
+        LazyShear() {}  // left unmade until its ray needs it
+    };
+    LazyShear lazy[kMaxPacket];
+    uint8_t made[kMaxPacket] = {};
+
+    const WatertightRay& of(const Ray* rays, uint32_t i) {
+        if (!made[i]) {
+            new (&lazy[i].shear) WatertightRay(rays[i]);
+            made[i] = 1;
+        }
+        return lazy[i].shear;
+    }
+};
+
+// The children of `node` the packet enters (bit = slot), each with its first ray (the first active ray
+// from `first` on that enters it) and that ray's entry distance. Ray `first` tests all children at
+// once; the packet's frustum culls most of the children it misses, and each of the rest looks for its
+// first ray among the later active ones, S::kLanes rays at a time.
+template <class S, bool kStats>
+[[gnu::always_inline]] inline unsigned first_rays_of_children(const WideNode<S::kLanes>& node, uint32_t first,
+                                                              const PacketRaysSoA& soa, const PacketFrustum& frustum,
+                                                              const ActivePacketRays<S::kLanes>& active,
+                                                              uint32_t* first_ray, float* first_entry,
+                                                              TraversalStats* stats) {
+    constexpr int W = S::kLanes;
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    unsigned assigned = 0;
+    unsigned remaining = (1u << W) - 1;
+    {
+        const float org[3] = {soa.org[0][first], soa.org[1][first], soa.org[2][first]};
+        const float inv_dir[3] = {soa.inv_dir[0][first], soa.inv_dir[1][first], soa.inv_dir[2][first]};
+        const PacketRay<S> ray{org, inv_dir, frustum.entry_plane, frustum.exit_plane};
+        alignas(32) float entry[W];
+        alignas(32) uint32_t slot[W];
+        const int entered = enter_children<S>(node, ray, soa.tmin[first], soa.tmax[first], entry, slot);
+        if constexpr (kStats)
+            for (int child = 0; child < W; ++child) stats->nodes_visited += node.used(child);
+        for (int k = 0; k < entered; ++k) {
+            first_ray[slot[k]] = first;
+            first_entry[slot[k]] = entry[k];
+            assigned |= 1u << slot[k];
+            remaining &= ~(1u << slot[k]);
+        }
+    }
+    if (remaining) remaining &= frustum_mask<S>(node, frustum);
+    for (; remaining; remaining &= remaining - 1) {
+        const uint32_t child_slot = uint32_t(__builtin_ctz(remaining));
+        for (uint32_t c = (first + 1) / L; c < active.chunks; ++c) {
+            const unsigned candidates = active.after(c, first);
+            if (!candidates) continue;
+            if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
+            alignas(64) float entry[L];
+            const unsigned entering = candidates & rays_entering_child<S>(node, child_slot, soa, c * L, frustum, entry);
+            if (!entering) continue;
+            const uint32_t lane = uint32_t(__builtin_ctz(entering));
+            first_ray[child_slot] = c * L + lane;
+            first_entry[child_slot] = entry[lane];
+            assigned |= 1u << child_slot;
+            break;
+        }
+    }
+    return assigned;
+}
+
+// Pushes the children in `assigned` (node `node_index`'s) in visits_after's order (wide_kernel.inl)
+// by the entry distance of each one's first ray, all but the first to visit, which it returns.
+template <bool kAnyHit, int W>
+[[gnu::always_inline]] inline PacketStackEntry push_children(const WideNode<W>& node, uint32_t node_index,
+                                                             unsigned assigned, const uint32_t* first_ray,
+                                                             const float* first_entry, PacketStackEntry* stack,
+                                                             int& top) {
+    uint32_t order[W];
+    int n = 0;
+    for (unsigned bits = assigned; bits; bits &= bits - 1) {
+        const uint32_t slot = uint32_t(__builtin_ctz(bits));
+        int j = n++;
+        while (j > 0 && visits_after<kAnyHit>(node, first_entry[slot], slot, first_entry[order[j - 1]], order[j - 1])) {
+            order[j] = order[j - 1];
+            --j;
+        }
+        order[j] = slot;
+    }
+    for (int k = 0; k < n - 1; ++k)
+        stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]], node_index, order[k]};
+    return {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]], node_index, order[n - 1]};
+}
+
+// The inner node `current`: sets `current` to the child to visit next, the other entered children
+// pushed, and returns true; false when the packet enters no child.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool enter_packet_node(const WideLayout<S::kLanes>& layout, const PacketRaysSoA& soa,
+                                                     const PacketFrustum& frustum,
+                                                     const ActivePacketRays<S::kLanes>& active,
+                                                     PacketStackEntry& current, PacketStackEntry* stack, int& top,
+                                                     TraversalStats* stats) {
+    constexpr int W = S::kLanes;
+    const WideNode<W>& node = layout.nodes[current.child];
+    if constexpr (kAnyHit) {
+        // A blocked first ray enters nothing: the node's first active ray at or after it takes its
+        // place (rays before it miss the node or are settled).
+        current.first = active.first_from(current.first);
+        if (current.first == kNoRay) return false;
+    }
+    alignas(32) float first_entry[W];
+    uint32_t first_ray[W];
+    const unsigned assigned =
+        first_rays_of_children<S, kStats>(node, current.first, soa, frustum, active, first_ray, first_entry, stats);
+    if (!assigned) return false;
+    current = push_children<kAnyHit>(node, current.child, assigned, first_ray, first_entry, stack, top);
+    if (current.count == 0) prefetch_node(layout.nodes[current.child]);
+    return true;
+}
+
+// The rays that enter the leaf `leaf` (bit j of entering[c]: ray c * L + j). Only its first ray is
+// known to (unless it has been blocked since): the later active rays test its box (six planes against
+// a pack test of four triangles), S::kLanes rays at a time. The box test only reads each ray's own
+// tmax, which only its own triangle tests change, so all of them can be found before any is tested.
+template <class S, bool kStats>
+[[gnu::always_inline]] inline void rays_entering_leaf(const WideNode<S::kLanes>& parent, const PacketStackEntry& leaf,
+                                                      const PacketRaysSoA& soa, const PacketFrustum& frustum,
+                                                      const ActivePacketRays<S::kLanes>& active, unsigned* entering,
+                                                      TraversalStats* stats) {
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    const uint32_t first_chunk = leaf.first / L;
+    for (uint32_t c = first_chunk; c < active.chunks; ++c) {
+        const unsigned candidates = active.after(c, leaf.first);
+        entering[c] = 0;
+        if (!candidates) continue;
+        if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
+        entering[c] = candidates & rays_entering_child<S>(parent, leaf.slot, soa, c * L, frustum);
+    }
+    entering[first_chunk] |= active.bits[first_chunk] & (1u << (leaf.first % L));
+}
+
+// The leaf's triangles against the rays of chunk `c` in `entering`, one triangle against S::kLanes
+// rays at a time (the rays share their shear axes); near an edge or a vertex, the exact test ray by
+// ray. Returns true when it blocks the last unsettled ray of an occlusion packet.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool leaf_over_rays(const TrianglePack* packs, const PacketStackEntry& leaf, uint32_t c,
+                                                  unsigned entering, const Ray* rays, PacketRaysSoA& soa,
+                                                  PacketShearAxes axes, ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                  TraversalStats* stats) {
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    const uint32_t base = c * L;
+    for (uint32_t lane_index = 0; lane_index < leaf.count && entering; ++lane_index) {
+        const TrianglePack& pack = packs[leaf.child + lane_index / 4];
+        const int lane = int(lane_index % 4);
+        if constexpr (kStats)
+            if (lane == 0)
+                stats->triangles_tested +=
+                    uint64_t(__builtin_popcount(entering)) * std::min(4u, leaf.count - lane_index);
+        alignas(64) float u[L], v[L], w[L];
+        unsigned outside, inside;
+        edges_over_rays<S>(pack, lane, soa, base, axes.kx, axes.ky, axes.kz, u, v, w, outside, inside);
+        const unsigned candidates = entering & ~outside;
+        if (!candidates) continue;
+        Vec3 vertex[3];
+        pack_triangle(pack, lane, vertex);
+        alignas(64) double t[L];
+        unsigned crossed = candidates & inside ? crossings_in_range<S>(vertex, soa, base, candidates & inside, t) : 0;
+        if constexpr (!kAnyHit)
+            for (unsigned bits = crossed; bits; bits &= bits - 1) {
+                const uint32_t j = uint32_t(__builtin_ctz(bits)), i = base + j;
+                const float det = u[j] + v[j] + w[j];
+                soa.tmax[i] = float(t[j]);
+                hits[i] = {float(t[j]), pack.primitive[lane], v[j] / det, w[j] / det};
+            }
+        for (unsigned near_edge = candidates & ~inside; near_edge; near_edge &= near_edge - 1) {
+            const uint32_t j = uint32_t(__builtin_ctz(near_edge)), i = base + j;
+            TriangleHit candidate;
+            if (!decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j], candidate))
+                continue;
+            crossed |= 1u << j;
+            if constexpr (!kAnyHit) {
+                soa.tmax[i] = candidate.t;
+                hits[i] = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
+            }
+        }
+        if constexpr (kAnyHit) {
+            if (!crossed) continue;
+            entering &= ~crossed;
+            if (active.settle(c, crossed)) return true;
+        }
+    }
+    return false;
+}
+
+// The leaf's triangles against the rays of chunk `c` in `entering`, ray by ray with the single-ray
+// leaf test. Returns true when it blocks the last unsettled ray of an occlusion packet.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool leaf_ray_by_ray(const TrianglePack* packs, const PacketStackEntry& leaf, uint32_t c,
+                                                   unsigned entering, const Ray* rays, PacketRaysSoA& soa,
+                                                   LazyShears& shears, ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                   TraversalStats* stats) {
+    const uint32_t base = c * uint32_t(S::kLanes);
+    for (; entering; entering &= entering - 1) {
+        const uint32_t j = uint32_t(__builtin_ctz(entering)), i = base + j;
+        const WatertightRay& shear = shears.of(rays, i);
+        const PackRay pack_ray(shear);
+        Hit unused;
+        bool found = false;
+        test_leaf<S, kAnyHit, kStats>(packs, leaf.child, leaf.count, rays[i], shear, pack_ray, soa.tmax[i],
+                                      kAnyHit ? unused : hits[i], found, stats);
+        if (kAnyHit && found && active.settle(c, 1u << j)) return true;
+    }
+    return false;
+}
+
+// The leaf `leaf` for every active ray that enters it. Each ray meets the leaf's triangles in lane
+// order with its own tmax, whichever way they are tested, so both ways give the same answers.
+// Returns true when the last unsettled ray of an occlusion packet is blocked.
+template <class S, bool kAnyHit, bool kStats>
+[[gnu::always_inline]] inline bool trace_packet_leaf(const WideLayout<S::kLanes>& layout, const PacketStackEntry& leaf,
+                                                     const Ray* rays, PacketRaysSoA& soa, const PacketFrustum& frustum,
+                                                     PacketShearAxes axes, LazyShears& shears,
+                                                     ActivePacketRays<S::kLanes>& active, Hit* hits,
+                                                     TraversalStats* stats) {
+    constexpr uint32_t L = uint32_t(S::kLanes);
+    unsigned entering[kMaxPacket / L];
+    rays_entering_leaf<S, kStats>(layout.nodes[leaf.parent], leaf, soa, frustum, active, entering, stats);
+    const TrianglePack* packs = layout.packs.data();
+    for (uint32_t c = leaf.first / L; c < active.chunks; ++c) {
+        // Most of the chunk's rays enter: one triangle against all of them at a time.
+        if (!S::kScalarTriangles && axes.shared && 2 * uint32_t(__builtin_popcount(entering[c])) >= L) {
+            if (leaf_over_rays<S, kAnyHit, kStats>(packs, leaf, c, entering[c], rays, soa, axes, active, hits, stats))
+                return true;
+        } else if (leaf_ray_by_ray<S, kAnyHit, kStats>(packs, leaf, c, entering[c], rays, soa, shears, active, hits,
+                                                       stats)) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // Traces a packet whose rays share the sign of each direction component (nonzero) and returns true;
 // returns false, having traced nothing, for any other packet.
 template <class S, bool kAnyHit, bool kStats>
 bool trace_coherent_packet(const WideLayout<S::kLanes>& layout, const Ray* rays, uint32_t count, Hit* hits,
                            uint8_t* occluded, TraversalStats* stats) {
-    constexpr int W = S::kLanes;
     constexpr uint32_t L = uint32_t(S::kLanes);
     const uint32_t padded_count = (count + L - 1) / L * L;
-    // The rays in structure-of-arrays form (PacketRaysSoA: the padding enters nothing). Inverse
-    // directions and shears are divided L rays at a time (the same correctly rounded divisions as the
-    // single-ray kernel's).
     PacketRaysSoA soa;
-    const uint32_t whole_chunks_end = count / 8 * 8;
-    for (uint32_t base = 0; base < whole_chunks_end; base += 8) load_eight_rays<S>(rays, base, soa);
-    for (uint32_t i = whole_chunks_end; i < count; ++i) {
-        for (int axis = 0; axis < 3; ++axis) {
-            soa.org[axis][i] = rays[i].org[axis];
-            soa.dir[axis][i] = rays[i].dir[axis];
-        }
-        soa.tmin[i] = rays[i].tmin;
-        soa.tmax[i] = rays[i].tmax;
-    }
-    for (uint32_t i = count; i < padded_count; ++i) {
-        for (int axis = 0; axis < 3; ++axis) {
-            soa.org[axis][i] = rays[0].org[axis];
-            soa.dir[axis][i] = rays[0].dir[axis];
-        }
-        soa.tmin[i] = kInfinity;
-        soa.tmax[i] = -kInfinity;
-    }
-    for (uint32_t base = 0; base < padded_count; base += L)
-        for (int axis = 0; axis < 3; ++axis)
-            S::store(soa.inv_dir[axis] + base, S::div(S::set1(1.0f), S::load(soa.dir[axis] + base)));
-
+    load_packet<S>(rays, count, padded_count, soa);
     PacketFrustum frustum;
     if (!make_frustum<S>(soa, padded_count, frustum)) return false;
     if constexpr (!kAnyHit)
         for (uint32_t i = 0; i < count; ++i) hits[i] = Hit{};
-
-    // The shear axes of the watertight triangle test (WatertightRay): when every ray of the packet
-    // shears along the same axes, leaves test triangles over rays with the shears kept in soa; the
-    // WatertightRay of a ray that tests a leaf on its own is made when it first does.
     const WatertightRay first_shear(rays[0]);
-    const int kx = first_shear.kx, ky = first_shear.ky, kz = first_shear.kz;
-    const bool same_shear_axes = all_dominant_on<S>(soa, padded_count, kz);
-    if (same_shear_axes) {
-        for (uint32_t base = 0; base < padded_count; base += L) {
-            const typename S::F dir_z = S::load(soa.dir[kz] + base);
-            S::store(soa.shear_x + base, S::div(S::load(soa.dir[kx] + base), dir_z));
-            S::store(soa.shear_y + base, S::div(S::load(soa.dir[ky] + base), dir_z));
-        }
-    }
-    union LazyShear {
-        WatertightRay shear;
-        LazyShear() {}  // left unmade: most packets never need most of them
-    };
-    LazyShear shears[kMaxPacket];
-    uint8_t sheared[kMaxPacket] = {};
+    const PacketShearAxes axes{first_shear.kx, first_shear.ky, first_shear.kz,
+                               all_dominant_on<S>(soa, padded_count, first_shear.kz)};
+    if (axes.shared) shear_packet<S>(soa, padded_count, axes.kx, axes.ky, axes.kz);
+    LazyShears shears;
 
     ActivePacketRays<L> active(count);
-    // parent, slot: the node whose child this is, so a leaf's box can be tested ray by ray.
-    struct Entry {
-        uint32_t child, count, first, parent, slot;
-    };
-    Entry stack[(W - 1) * 1024 + 1];
+    // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
+    PacketStackEntry stack[(S::kLanes - 1) * 1024 + 1];
     int top = 0;
-    Entry current{0, 0, 0, 0, 0};
-
+    PacketStackEntry current{0, 0, 0, 0, 0};
     while (true) {
         if (current.count == 0) {
-            const WideNode<W>& node = layout.nodes[current.child];
-            if constexpr (kAnyHit) {
-                // A blocked first ray enters nothing: the node's first active ray at or after it takes
-                // its place (rays before it miss the node or are settled).
-                current.first = active.first_from(current.first);
-                if (current.first == kNoRay) goto pop;
-            }
-            uint32_t valid_children = 0;
-            if constexpr (kStats)
-                for (int slot = 0; slot < W; ++slot) valid_children += node.used(slot);
-            alignas(32) float first_entry[W];
-            uint32_t first_ray[W];
-            unsigned assigned = 0;
-            unsigned remaining = (1u << W) - 1;
-            {
-                // The first active ray tests all children at once.
-                const uint32_t i = current.first;
-                const float org[3] = {soa.org[0][i], soa.org[1][i], soa.org[2][i]};
-                const float inv_dir[3] = {soa.inv_dir[0][i], soa.inv_dir[1][i], soa.inv_dir[2][i]};
-                const PacketRay<S> ray{org, inv_dir, frustum.entry_plane, frustum.exit_plane};
-                alignas(32) float entry[W];
-                alignas(32) uint32_t slot[W];
-                const int entered = enter_children<S>(node, ray, soa.tmin[i], soa.tmax[i], entry, slot);
-                if constexpr (kStats) stats->nodes_visited += valid_children;
-                for (int k = 0; k < entered; ++k) {
-                    first_ray[slot[k]] = i;
-                    first_entry[slot[k]] = entry[k];
-                    assigned |= 1u << slot[k];
-                    remaining &= ~(1u << slot[k]);
-                }
-            }
-            // It missed some children: the packet's frustum culls most of them; each of the rest looks
-            // for its first ray among the later active ones, S::kLanes rays at a time.
-            if (remaining) remaining &= frustum_mask<S>(node, frustum);
-            for (; remaining; remaining &= remaining - 1) {
-                const uint32_t child_slot = uint32_t(__builtin_ctz(remaining));
-                for (uint32_t c = (current.first + 1) / L; c < active.chunks; ++c) {
-                    const unsigned candidates = active.after(c, current.first);
-                    if (!candidates) continue;
-                    if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
-                    alignas(64) float entry[L];
-                    const unsigned entering =
-                        candidates & rays_entering_child<S>(node, child_slot, soa, c * L, frustum, entry);
-                    if (!entering) continue;
-                    const uint32_t lane = uint32_t(__builtin_ctz(entering));
-                    first_ray[child_slot] = c * L + lane;
-                    first_entry[child_slot] = entry[lane];
-                    assigned |= 1u << child_slot;
-                    break;
-                }
-            }
-            if (assigned) {
-                // In visits_after's order (wide_kernel.inl) by the entry distance of each child's first ray;
-                // the rest go on the stack.
-                uint32_t order[W];
-                int n = 0;
-                for (unsigned bits = assigned; bits; bits &= bits - 1) {
-                    const uint32_t slot = uint32_t(__builtin_ctz(bits));
-                    int j = n++;
-                    while (j > 0 && visits_after<kAnyHit>(node, first_entry[slot], slot, first_entry[order[j - 1]],
-                                                          order[j - 1])) {
-                        order[j] = order[j - 1];
-                        --j;
-                    }
-                    order[j] = slot;
-                }
-                for (int k = 0; k < n - 1; ++k)
-                    stack[top++] = {node.child[order[k]], node.count[order[k]], first_ray[order[k]], current.child,
-                                    order[k]};
-                current = {node.child[order[n - 1]], node.count[order[n - 1]], first_ray[order[n - 1]], current.child,
-                           order[n - 1]};
-                if (current.count == 0) prefetch_node(layout.nodes[current.child]);
+            if (enter_packet_node<S, kAnyHit, kStats>(layout, soa, frustum, active, current, stack, top, stats))
                 continue;
-            }
-        } else {
-            // Only the first ray is known to enter the leaf (unless it has been blocked since): the
-            // later active rays test its box first (six planes against a pack test of four
-            // triangles), S::kLanes rays at a time. The box test only reads each ray's own tmax,
-            // which only its own triangle tests change, so all of them can be found before any is
-            // tested.
-            const WideNode<W>& parent = layout.nodes[current.parent];
-            const uint32_t first_chunk = current.first / L;
-            unsigned entering_chunk[kMaxPacket / L];  // bit j of chunk c: ray c * L + j enters the leaf
-            for (uint32_t c = first_chunk; c < active.chunks; ++c) {
-                const unsigned candidates = active.after(c, current.first);
-                entering_chunk[c] = 0;
-                if (!candidates) continue;
-                if constexpr (kStats) stats->nodes_visited += uint32_t(__builtin_popcount(candidates));
-                entering_chunk[c] = candidates & rays_entering_child<S>(parent, current.slot, soa, c * L, frustum);
-            }
-            entering_chunk[first_chunk] |= active.bits[first_chunk] & (1u << (current.first % L));
-            // Each ray meets the leaf's triangles in lane order with its own tmax, whichever way they
-            // are tested, so both ways give the same answers.
-            for (uint32_t c = first_chunk; c < active.chunks; ++c) {
-                unsigned entering = entering_chunk[c];
-                const uint32_t base = c * L;
-                if (!S::kScalarTriangles && same_shear_axes && 2 * uint32_t(__builtin_popcount(entering)) >= L) {
-                    // Most of these rays enter: one triangle against L rays at a time.
-                    for (uint32_t lane_index = 0; lane_index < current.count && entering; ++lane_index) {
-                        const TrianglePack& pack = layout.packs[current.child + lane_index / 4];
-                        const int lane = int(lane_index % 4);
-                        if constexpr (kStats)
-                            if (lane == 0)
-                                stats->triangles_tested +=
-                                    uint64_t(__builtin_popcount(entering)) * std::min(4u, current.count - lane_index);
-                        alignas(64) float u[L], v[L], w[L];
-                        unsigned outside, inside;
-                        edges_over_rays<S>(pack, lane, soa, base, kx, ky, kz, u, v, w, outside, inside);
-                        const unsigned candidates = entering & ~outside;
-                        if (!candidates) continue;
-                        Vec3 vertex[3];
-                        pack_triangle(pack, lane, vertex);
-                        alignas(64) double t[L];
-                        unsigned crossed =
-                            candidates & inside ? crossings_in_range<S>(vertex, soa, base, candidates & inside, t) : 0;
-                        if constexpr (!kAnyHit)
-                            for (unsigned bits = crossed; bits; bits &= bits - 1) {
-                                const uint32_t j = uint32_t(__builtin_ctz(bits)), i = base + j;
-                                const float det = u[j] + v[j] + w[j];
-                                soa.tmax[i] = float(t[j]);
-                                hits[i] = {float(t[j]), pack.primitive[lane], v[j] / det, w[j] / det};
-                            }
-                        // Near an edge or a vertex: the exact test, ray by ray.
-                        for (unsigned near_edge = candidates & ~inside; near_edge; near_edge &= near_edge - 1) {
-                            const uint32_t j = uint32_t(__builtin_ctz(near_edge)), i = base + j;
-                            TriangleHit candidate;
-                            if (!decide_exactly(rays[i], vertex[0], vertex[1], vertex[2], soa.tmax[i], u[j], v[j], w[j],
-                                                candidate))
-                                continue;
-                            crossed |= 1u << j;
-                            if constexpr (!kAnyHit) {
-                                soa.tmax[i] = candidate.t;
-                                hits[i] = {candidate.t, pack.primitive[lane], candidate.u, candidate.v};
-                            }
-                        }
-                        if constexpr (kAnyHit) {
-                            if (!crossed) continue;
-                            entering &= ~crossed;
-                            if (active.settle(c, crossed)) {
-                                active.write_occlusion(occluded, count);
-                                return true;
-                            }
-                        }
-                    }
-                    continue;
-                }
-                for (; entering; entering &= entering - 1) {
-                    const uint32_t j = uint32_t(__builtin_ctz(entering)), i = base + j;
-                    if (!sheared[i]) {
-                        new (&shears[i].shear) WatertightRay(rays[i]);
-                        sheared[i] = 1;
-                    }
-                    const WatertightRay& shear = shears[i].shear;
-                    const PackRay pack_ray(shear);
-                    Hit unused;
-                    bool found = false;
-                    test_leaf<S, kAnyHit, kStats>(layout.packs.data(), current.child, current.count, rays[i], shear,
-                                                  pack_ray, soa.tmax[i], kAnyHit ? unused : hits[i], found, stats);
-                    if (kAnyHit && found && active.settle(c, 1u << j)) {
-                        active.write_occlusion(occluded, count);
-                        return true;
-                    }
-                }
-            }
+        } else if (trace_packet_leaf<S, kAnyHit, kStats>(layout, current, rays, soa, frustum, axes, shears, active,
+                                                         hits, stats)) {
+            active.write_occlusion(occluded, count);  // every ray is blocked
+            return true;
         }
-    pop:
-        __attribute__((unused));  // only occlusion packets jump here
         if (top == 0) {
             if constexpr (kAnyHit) active.write_occlusion(occluded, count);
             return true;

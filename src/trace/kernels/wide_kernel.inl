@@ -104,8 +104,8 @@ template <class S, bool kAnyHit, bool kStats>
 }
 
 // The order children are visited in (closest hits here; any hit only in the packet kernel: the
-// single-ray kernel picks the farthest child, see traverse): true when child a (entered at entry_a)
-// is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
+// single-ray kernel picks the farthest child, see push_all_but_farthest): true when child a (entered
+// at entry_a) is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
 // hit: leaves first (a hit there ends the ray at once), then the inner children farthest first.
 // Nearest first is the worst order for occlusion: diffuse rays start on a surface, whose
 // neighbourhood they must cross but which rarely occludes them. Farthest first tests fewer boxes
@@ -148,6 +148,59 @@ struct NoMollerRay {
     explicit NoMollerRay(const Ray&) {}
 };
 
+// A subtree pending on a single ray's stack, with the distance at which the ray enters it.
+struct RayStackEntry {
+    uint32_t child, count;
+    float entry;
+};
+
+// Any hit: the farthest entered child (of `mask`) is visited next (ties: the later slot), returned;
+// the others are pushed unsorted in slot order, so they pop smallest subtree first (the layout orders
+// a node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a surface whose
+// neighbourhood it must cross but which rarely occludes it, so the far child is the likelier
+// occluder; and sorting them all costs more than it saves. Embree pushes unsorted too; sorting all of
+// them (leaf children first, then farthest first, as the packets do) is slower.
+template <class Node>
+[[gnu::always_inline]] inline RayStackEntry push_all_but_farthest(const Node& node, unsigned mask, const float* entry,
+                                                                  RayStackEntry* stack, int& top) {
+    uint32_t farthest = uint32_t(__builtin_ctz(mask));
+    for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
+        const uint32_t lane = uint32_t(__builtin_ctz(rest));
+        if (entry[lane] >= entry[farthest]) farthest = lane;
+    }
+    for (unsigned rest = mask & ~(1u << farthest); rest != 0; rest &= rest - 1) {
+        const uint32_t lane = uint32_t(__builtin_ctz(rest));
+        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
+    }
+    return {node.child[farthest], node.count[farthest], entry[farthest]};
+}
+
+// Closest hit, three or more children entered (`first`, `second` and those left in `mask`): sorts
+// their visit keys (visit_order.hpp: visits_after's order as integers), pushes all but the nearest,
+// the last to visit deepest, and returns the nearest. 8-byte integer keys sort in a few min/max
+// steps, far fewer instructions than an insertion sort of 12-byte stack entries.
+template <int W, class Node>
+[[gnu::always_inline]] inline RayStackEntry push_sorted_but_nearest(const Node& node, unsigned mask, uint32_t first,
+                                                                    uint32_t second, const float* entry,
+                                                                    RayStackEntry* stack, int& top) {
+    uint64_t key[W];
+    int n = 0;
+    key[n++] = visit_key(entry[first], first);
+    key[n++] = visit_key(entry[second], second);
+    do {
+        const uint32_t lane = uint32_t(__builtin_ctz(mask));
+        mask &= mask - 1;
+        key[n++] = visit_key(entry[lane], lane);
+    } while (mask != 0);
+    sort_visit_keys<W>(key, n);
+    for (int i = n - 1; i > 0; --i) {
+        const uint32_t lane = visit_key_slot(key[i]);
+        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
+    }
+    const uint32_t lane = visit_key_slot(key[0]);
+    return {node.child[lane], node.count[lane], entry[lane]};
+}
+
 // Closest hit (kAnyHit = false) or any hit. Children a ray enters are visited nearest first; entries
 // on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
 // skipped when popped. kMoller: leaves take the moller leaf test (moller_filter.hpp) on layout.planes.
@@ -172,14 +225,10 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
     float tmax = ray.tmax;
     bool found = false;
 
-    struct Entry {
-        uint32_t child, count;
-        float entry;
-    };
     // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
-    Entry stack[(W - 1) * 1024 + 1];
+    RayStackEntry stack[(W - 1) * 1024 + 1];
     int top = 0;
-    Entry current{0, 0, tmin};
+    RayStackEntry current{0, 0, tmin};
 
     while (true) {
         if (current.count == 0) {
@@ -195,23 +244,7 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
                 alignas(64) float entry[W];
                 S::store(entry, near);
                 if constexpr (kAnyHit) {
-                    // Any hit: the farthest entered child next (ties: the later slot), the others pushed
-                    // unsorted in slot order, so they pop smallest subtree first (the layout orders a
-                    // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a
-                    // surface whose neighbourhood it must cross but which rarely occludes it, so the
-                    // far child is the likelier occluder; and sorting them all costs more than it
-                    // saves. Embree pushes unsorted too; sorting all of them (leaf children first,
-                    // then farthest first, as the packets do) is slower.
-                    uint32_t farthest = uint32_t(__builtin_ctz(mask));
-                    for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
-                        const uint32_t lane = uint32_t(__builtin_ctz(rest));
-                        if (entry[lane] >= entry[farthest]) farthest = lane;
-                    }
-                    for (unsigned rest = mask & ~(1u << farthest); rest != 0; rest &= rest - 1) {
-                        const uint32_t lane = uint32_t(__builtin_ctz(rest));
-                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
-                    }
-                    current = {node.child[farthest], node.count[farthest], entry[farthest]};
+                    current = push_all_but_farthest(node, mask, entry, stack, top);
                     prefetch_child(nodes, packs, planes, current.child, current.count);
                     if (top > 0) prefetch_child(nodes, packs, planes, stack[top - 1].child, stack[top - 1].count);
                     continue;
@@ -234,26 +267,7 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
                     stack[top++] = {node.child[later], node.count[later], entry[later]};
                     current = {node.child[next], node.count[next], entry[next]};
                 } else {
-                    // Three or more: sort their visit keys (visit_order.hpp: visits_after's order as
-                    // integers), then push all but the first to visit, the last to visit deepest. 8-byte integer
-                    // keys sort in a few min/max steps, far fewer instructions than an insertion sort
-                    // of 12-byte stack entries.
-                    uint64_t key[W];
-                    int n = 0;
-                    key[n++] = visit_key(entry[first], first);
-                    key[n++] = visit_key(entry[second], second);
-                    do {
-                        const uint32_t lane = uint32_t(__builtin_ctz(mask));
-                        mask &= mask - 1;
-                        key[n++] = visit_key(entry[lane], lane);
-                    } while (mask != 0);
-                    sort_visit_keys<W>(key, n);
-                    for (int i = n - 1; i > 0; --i) {
-                        const uint32_t lane = visit_key_slot(key[i]);
-                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
-                    }
-                    const uint32_t lane = visit_key_slot(key[0]);
-                    current = {node.child[lane], node.count[lane], entry[lane]};
+                    current = push_sorted_but_nearest<W>(node, mask, first, second, entry, stack, top);
                 }
                 prefetch_child(nodes, packs, planes, current.child, current.count);
                 // The next pop is likely soon: fetch it too.
