@@ -104,8 +104,8 @@ template <class S, bool kAnyHit, bool kStats>
 }
 
 // The order children are visited in (closest hits here; any hit only in the packet kernel: the
-// single-ray kernel picks the farthest child, see push_all_but_farthest): true when child a (entered
-// at entry_a) is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
+// single-ray kernel picks the farthest child, see traverse): true when child a (entered at entry_a)
+// is visited after child b. Closest hit: nearest first, so the hit found first prunes the rest. Any
 // hit: leaves first (a hit there ends the ray at once), then the inner children farthest first.
 // Nearest first is the worst order for occlusion: diffuse rays start on a surface, whose
 // neighbourhood they must cross but which rarely occludes them. Farthest first tests fewer boxes
@@ -153,27 +153,6 @@ struct RayStackEntry {
     uint32_t child, count;
     float entry;
 };
-
-// Any hit: the farthest entered child (of `mask`) is visited next (ties: the later slot), returned;
-// the others are pushed unsorted in slot order, so they pop smallest subtree first (the layout orders
-// a node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a surface whose
-// neighbourhood it must cross but which rarely occludes it, so the far child is the likelier
-// occluder; and sorting them all costs more than it saves. Embree pushes unsorted too; sorting all of
-// them (leaf children first, then farthest first, as the packets do) is slower.
-template <class Node>
-[[gnu::always_inline]] inline RayStackEntry push_all_but_farthest(const Node& node, unsigned mask, const float* entry,
-                                                                  RayStackEntry* stack, int& top) {
-    uint32_t farthest = uint32_t(__builtin_ctz(mask));
-    for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
-        const uint32_t lane = uint32_t(__builtin_ctz(rest));
-        if (entry[lane] >= entry[farthest]) farthest = lane;
-    }
-    for (unsigned rest = mask & ~(1u << farthest); rest != 0; rest &= rest - 1) {
-        const uint32_t lane = uint32_t(__builtin_ctz(rest));
-        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
-    }
-    return {node.child[farthest], node.count[farthest], entry[farthest]};
-}
 
 // Closest hit, three or more children entered (`first`, `second` and those left in `mask`): sorts
 // their visit keys (visit_order.hpp: visits_after's order as integers), pushes all but the nearest,
@@ -244,7 +223,23 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
                 alignas(64) float entry[W];
                 S::store(entry, near);
                 if constexpr (kAnyHit) {
-                    current = push_all_but_farthest(node, mask, entry, stack, top);
+                    // Any hit: the farthest entered child next (ties: the later slot), the others pushed
+                    // unsorted in slot order, so they pop smallest subtree first (the layout orders a
+                    // node's slots by decreasing size, wide_layout.cpp). A diffuse ray starts on a
+                    // surface whose neighbourhood it must cross but which rarely occludes it, so the
+                    // far child is the likelier occluder; and sorting them all costs more than it
+                    // saves. Embree pushes unsorted too; sorting all of them (leaf children first,
+                    // then farthest first, as the packets do) is slower.
+                    uint32_t farthest = uint32_t(__builtin_ctz(mask));
+                    for (unsigned rest = mask & (mask - 1); rest != 0; rest &= rest - 1) {
+                        const uint32_t lane = uint32_t(__builtin_ctz(rest));
+                        if (entry[lane] >= entry[farthest]) farthest = lane;
+                    }
+                    for (unsigned rest = mask & ~(1u << farthest); rest != 0; rest &= rest - 1) {
+                        const uint32_t lane = uint32_t(__builtin_ctz(rest));
+                        stack[top++] = {node.child[lane], node.count[lane], entry[lane]};
+                    }
+                    current = {node.child[farthest], node.count[farthest], entry[farthest]};
                     prefetch_child(nodes, packs, planes, current.child, current.count);
                     if (top > 0) prefetch_child(nodes, packs, planes, stack[top - 1].child, stack[top - 1].count);
                     continue;
