@@ -129,9 +129,7 @@ def test_termination_aware_builds(scene):
     chosen = spacebvh.build(scene, "spatial", termination_rays=2000)
     assert chosen.stats() == spacebvh.build(scene, "spatial", termination_rays=2000, threads=1).stats()
     # The two-pass build: rays traced on the built tree price its reinsertion.
-    optimized = spacebvh.build(
-        scene, "spatial", termination_rays=2000, termination_split=False, termination_optimize=4
-    )
+    optimized = spacebvh.build(scene, "spatial", termination_rays=2000, termination_split=False, termination_optimize=4)
     assert optimized.builder == "spatial+topt"
     with pytest.raises(spacebvh.Error, match="termination_rays"):
         spacebvh.build(scene, "spatial", termination_optimize=4)
