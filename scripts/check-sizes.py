@@ -26,6 +26,10 @@ PYTHON_SUFFIXES = (".py", ".pyi")
 SHELL_SUFFIXES = (".sh",)
 # Written by a program, not by us: the type stub comes from the built module (scripts/generate-stubs.sh).
 GENERATED_FILES = ("python/spacebvh/_core.pyi",)
+# Known to be over a limit, each with the work that ends it; listed, so that nothing new joins them.
+KNOWN_OVER = {
+    "src/trace/queries.cpp": "its layout, walks and batching move out with the one traversal skeleton",
+}
 
 
 def checked_files(root):
@@ -87,8 +91,13 @@ def main():
     failures = []
     for path in paths:
         lines = line_count(os.path.join(root, path))
-        if lines > MAX_FILE_LINES:
+        if lines > MAX_FILE_LINES and path in KNOWN_OVER:
+            print(f"check-sizes: {path}: {lines} lines, known: {KNOWN_OVER[path]}")
+        elif lines > MAX_FILE_LINES:
             failures.append(f"{path}: {lines} lines (file limit {MAX_FILE_LINES})")
+    for path in KNOWN_OVER:
+        if path in paths and line_count(os.path.join(root, path)) <= MAX_FILE_LINES:
+            failures.append(f"{path}: within the limits now; take it off KNOWN_OVER")
     functions = cpp_functions(root, [path for path in paths if path.endswith(CPP_SUFFIXES)])
     for path in paths:
         if path.endswith(PYTHON_SUFFIXES):
