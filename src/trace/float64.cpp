@@ -14,6 +14,7 @@
 
 #include "core/exact_float64.hpp"
 #include "spacebvh/error.hpp"
+#include "trace/traversal/walk.hpp"
 
 namespace spacebvh {
 
@@ -254,6 +255,47 @@ void Tracer64::Impl::init(const MeshView& mesh, const std::vector<Triangle64>& m
     }
 }
 
+namespace {
+
+// The node test of the float64 walk (walk.hpp): both children's widened boxes by the conservative
+// double slab test, nearest first; children entered beyond the best hit so far are skipped.
+class WidenedBoxQuery {
+public:
+    struct Entry {
+        uint32_t node;
+        double key;  // the (widened) distance the box is entered at
+    };
+    using Bound = double;  // min(tmax, the best t so far)
+    // One pending child per level (init refuses deeper trees), plus a node's two children.
+    static constexpr size_t kStackCapacity = kMaxDepth + 2;
+
+    WidenedBoxQuery(const Bvh& bvh, const LocalRay& ray, double tmin, Entry root)
+        : nodes_(bvh.nodes.data()), ray_(ray), tmin_(tmin), root_(root) {}
+
+    Entry root() const { return root_; }
+    bool is_leaf(const Entry& entry) const { return nodes_[entry.node].is_leaf(); }
+    bool beyond(const Entry& entry, Bound bound) const { return entry.key > bound; }
+    int enter(Entry& entry, Bound bound, Entry* out) const {
+        const uint32_t first = nodes_[entry.node].first;
+        double near[2] = {0.0, 0.0};
+        unsigned entered = 0;
+        for (uint32_t slot = 0; slot < 2; ++slot)
+            if (box_interval(nodes_[first + slot].bounds, ray_, tmin_, bound, near[slot])) entered |= 1u << slot;
+        if (entered == 0) return 0;
+        return trace::nearest_first(entered, near, entry, out, [&](int slot) {
+            return Entry{first + uint32_t(slot), near[slot]};
+        });
+    }
+
+private:
+    const BvhNode* nodes_;
+    const LocalRay& ray_;
+    double tmin_;
+    Entry root_;
+};
+
+}  // namespace
+
 template <bool AnyHit>
 Hit64 Tracer64::Impl::trace(const Ray64& ray) const {
     Hit64 best;
@@ -262,45 +304,18 @@ Hit64 Tracer64::Impl::trace(const Ray64& ray) const {
     const LocalRay local = make_local_ray(ray, origin);
     // Box intervals are clipped to [tmin, tmax] widened by the slab slack (the exact range test is the
     // triangles'); closest hit: boxes entered after the best hit so far are skipped.
-    const double tmin = ray.tmin, tmax = ray.tmax;
-    struct Entry {
-        uint32_t node;
-        double near;
-    };
-    // Depth-first with the far child pushed: at most one entry per level (init checks the depth).
-    Entry stack[kMaxDepth + 1];
-    size_t size = 0;
+    double far = std::min(ray.tmax, best.t);
     double near = 0.0;
-    if (!box_interval(bvh.nodes[0].bounds, local, tmin, tmax, near)) return best;
-    stack[size++] = {0, near};
-    while (size > 0) {
-        const Entry entry = stack[--size];
-        if (entry.near > best.t) continue;
-        const BvhNode& node = bvh.nodes[entry.node];
-        if (node.is_leaf()) {
-            for (uint32_t k = 0; k < node.reference_count; ++k)
-                if (test(ray, bvh.primitives[node.first + k], best) && AnyHit) return best;
-            continue;
+    if (!box_interval(bvh.nodes[0].bounds, local, ray.tmin, far, near)) return best;
+    trace::walk(WidenedBoxQuery(bvh, local, ray.tmin, {0, near}), far, [&](const WidenedBoxQuery::Entry& leaf) {
+        const BvhNode& node = bvh.nodes[leaf.node];
+        for (uint32_t k = 0; k < node.reference_count; ++k) {
+            if (!test(ray, bvh.primitives[node.first + k], best)) continue;
+            if (AnyHit) return true;
+            far = std::min(ray.tmax, best.t);
         }
-        const double limit = std::min(tmax, best.t);
-        double near_left = 0.0, near_right = 0.0;
-        const bool left = box_interval(bvh.nodes[node.first].bounds, local, tmin, limit, near_left);
-        const bool right = box_interval(bvh.nodes[node.first + 1].bounds, local, tmin, limit, near_right);
-        if (left && right) {
-            // The nearer child is popped first.
-            if (near_left <= near_right) {
-                stack[size++] = {node.first + 1, near_right};
-                stack[size++] = {node.first, near_left};
-            } else {
-                stack[size++] = {node.first, near_left};
-                stack[size++] = {node.first + 1, near_right};
-            }
-        } else if (left) {
-            stack[size++] = {node.first, near_left};
-        } else if (right) {
-            stack[size++] = {node.first + 1, near_right};
-        }
-    }
+        return false;
+    });
     return best;
 }
 

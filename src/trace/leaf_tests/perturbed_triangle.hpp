@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// The exact ray-triangle decisions of the multi-hit queries (queries.cpp, docs/queries.md), for a
-// triangle the float edge functions of the watertight test could not settle:
+// The exact ray-triangle decisions of the multi-hit queries (queries/query_walks.cpp,
+// docs/queries.md), for a triangle the float edge functions of the watertight test could not settle:
 //  - the sign of each edge function, exactly (filtered double, then an exact expansion); an edge
 //    function that is exactly zero gets the sign it takes when the ray's origin moves by
 //    e*x + e^2*y + e^3*z for an infinitesimal e (simulation of simplicity): the sign of the first
