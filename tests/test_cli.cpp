@@ -141,6 +141,22 @@ TEST_F(Cli, BuildWritesConsistentJson) {
     EXPECT_EQ(nodes, spacebvh::build(scene, config_for("cbvh")).nodes.size());
 }
 
+// --quality picks the tree spacebvh::build(mesh, Quality) builds, and excludes --builder and --tree.
+TEST_F(Cli, QualityLevelsAreTheLibrarys) {
+    const Scene scene = load_scene("builtin:soup");
+    for (const std::string level : quality_names()) {
+        const CliResult r = run("build builtin:soup --quality " + level + " --no-epo --json q.json");
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+        const nlohmann::json json = read_json("q.json");
+        const Bvh bvh = spacebvh::build(scene, parse_quality(level));
+        EXPECT_EQ(json["builder"], bvh.builder) << level;
+        EXPECT_EQ(json["nodes"].get<size_t>(), bvh.nodes.size()) << level;
+        EXPECT_EQ(json["references"].get<size_t>(), bvh.primitives.size()) << level;
+    }
+    expect_clean_failure("build builtin:soup --quality best", {"--quality"});
+    expect_clean_failure("build builtin:soup --quality fast --builder cbvh", {"--quality"});
+}
+
 // The overlap penalty is reported as a number (or "inf"), not as the whole cost description.
 TEST_F(Cli, BuildJsonReportsTheOverlapPenaltyItself) {
     ASSERT_EQ(run("build builtin:soup --builder binned --no-epo --co 0.5 --json half.json").exit_code, 0);

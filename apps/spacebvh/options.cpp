@@ -34,7 +34,15 @@ SceneTransform SceneOptions::transform() const {
 
 void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
     if (with_builder) {
-        command.add_option("--builder,-b", builder, "builder: " + builder_list())->capture_default_str();
+        CLI::Option* builder_option =
+            command.add_option("--builder,-b", builder, "builder: " + builder_list())->capture_default_str();
+        std::string levels;
+        for (const auto& name : quality_names()) levels += (levels.empty() ? "" : ", ") + name;
+        command
+            .add_option("--quality", quality,
+                        "a quality level in place of a builder, build time against tree quality: " + levels)
+            ->check(CLI::IsMember(quality_names()))
+            ->excludes(builder_option);
     }
     const std::vector<BuildSetting>& settings = build_settings();
     values.assign(settings.size(), std::string());  // sized once: the options keep pointers into it
@@ -66,7 +74,8 @@ void BuildCliOptions::add_to(CLI::App& command, bool with_builder) {
 }
 
 TreeRecipe BuildCliOptions::options(const std::string& builder_name) const {
-    TreeRecipe recipe = TreeRecipe::for_builder(builder_name);
+    TreeRecipe recipe =
+        quality.empty() ? TreeRecipe::for_builder(builder_name) : TreeRecipe::for_quality(parse_quality(quality));
     if (optimize) recipe.reinsertion.iterations = kDefaultReinsertionIterations;
     const std::vector<BuildSetting>& settings = build_settings();
     for (size_t i = 0; i < given.size(); ++i) {

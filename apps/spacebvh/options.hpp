@@ -33,14 +33,17 @@ struct SceneOptions {
 // (spacebvh/settings.hpp), made from it, plus the builder and --optimize.
 struct BuildCliOptions {
     std::string builder = "binned";
+    // A quality level in place of a builder (--quality fast|balanced|high: BuildConfig::for_quality);
+    // empty: the builder decides.
+    std::string quality;
     bool optimize = false;  // reinsertion optimisation with the default effort, as NAME+opt
     // Per setting, in build_settings() order: the text given, and the option (null before add_to).
     std::vector<std::string> values;
     std::vector<const CLI::Option*> given;
 
     void add_to(CLI::App& command, bool with_builder = true);
-    // The recipe of a builder name (TreeRecipe::for_builder: also "NAME+opt" and Embree's trees) with
-    // the settings given on the command line, validated.
+    // The recipe of a builder name (TreeRecipe::for_builder: also "NAME+opt" and Embree's trees), or of
+    // --quality when given (TreeRecipe::for_quality), with the settings given on the command line, validated.
     TreeRecipe options(const std::string& builder_name) const;
 };
 

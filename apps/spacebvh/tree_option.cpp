@@ -9,7 +9,8 @@ namespace spacebvh::cli {
 
 void TreeOption::add_to(CLI::App& command, const std::string& help) {
     CLI::Option* option = command.add_option("--tree", path, help);
-    if (CLI::Option* builder = command.get_option_no_throw("--builder")) option->excludes(builder);
+    for (const char* name : {"--builder", "--quality"})
+        if (CLI::Option* other = command.get_option_no_throw(name)) option->excludes(other);
 }
 
 Bvh tree_for(const TreeOption& tree, const Scene& scene, const TreeRecipe& options, double* milliseconds) {
