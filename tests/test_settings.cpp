@@ -132,7 +132,8 @@ TEST(Settings, RangesAreTheOnesValidateEnforces) {
 }
 
 // The option groups of build, trace, render, compare and optimum: one option per setting, and no
-// option that is not a setting (besides the builder and --optimize, NAME+opt's flag).
+// option that is not a setting (besides the builder, the quality level in its place and --optimize,
+// NAME+opt's flag).
 TEST(Settings, CliOptionsAreExactlyTheSettings) {
     CLI::App app;
     cli::BuildCliOptions options;
@@ -141,7 +142,7 @@ TEST(Settings, CliOptionsAreExactlyTheSettings) {
         EXPECT_NE(app.get_option_no_throw(setting.flag), nullptr) << setting.flag;
     for (const CLI::Option* option : app.get_options()) {
         const std::string name = "--" + option->get_lnames().front();
-        if (name == "--help" || name == "--builder" || name == "--optimize") continue;
+        if (name == "--help" || name == "--builder" || name == "--quality" || name == "--optimize") continue;
         EXPECT_NE(find_build_setting(name, SettingSpelling::flag), nullptr) << name << " is no build setting";
     }
 }
