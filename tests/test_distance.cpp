@@ -135,9 +135,10 @@ double documented_bound(const Vec3d& p, const Triangle& t) {
     auto len = [](double x, double y, double z) { return std::sqrt(x * x + y * y + z * z); };
     const Vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0, n = cross(e1, e2);
     const double l1 = len(e1.x, e1.y, e1.z), l2 = len(e2.x, e2.y, e2.z), ln = len(n.x, n.y, n.z);
-    const double s = len(p[0] - t.v0.x, p[1] - t.v0.y, p[2] - t.v0.z) + l1 + l2;
+    const double a = len(p[0] - t.v0.x, p[1] - t.v0.y, p[2] - t.v0.z);
+    const double s2 = a * a + (l1 + l2) * (l1 + l2);
     const double kappa = std::max(1.0, l1 * l2 / ln);
-    return kappa > 0x1p20 ? 2.0 * s * s : 0x1p-40 * kappa * s * s * 1.01;
+    return kappa > 0x1p20 ? 4.0 * s2 : 0x1p-39 * kappa * s2 * 1.01;
 }
 
 struct Expected {

@@ -5,6 +5,7 @@
 #include "spacebvh/distance.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -22,14 +23,45 @@ struct DistanceQueries::Layout {
     std::vector<Triangle> triangles;
     RayQueries rays;  // containment; built first: it refuses trees too deep for the walks
     trace::WideLayout<8> wide;
+    std::vector<TriangleConditioning> conditioning;  // of wide's pack lanes
     WindingTree winding;
+    AABB bounds;  // of every triangle: the grid large batches are ordered on
 
     Layout(std::span<const Triangle> t, const Bvh& bvh)
         : triangles(t.begin(), t.end()),
           rays(t, bvh),
           wide(bvh.empty() || t.empty() ? trace::WideLayout<8>{}
                                         : trace::collapse_to_wide<8>(t, bvh, WideCollapse::sah_optimal)),
-          winding(t, bvh) {}
+          conditioning(pack_conditioning(wide)),
+          winding(t, bvh) {
+        for (const Triangle& triangle : t) bounds.extend(triangle.bounds());
+    }
+
+    ClosestPoint nearest(const Vec3d& p, double max_distance, std::vector<Candidate>& scratch) const {
+        return nearest_triangle(wide, conditioning, triangles, p, max_distance, scratch);
+    }
+    // Runs nearest(points[i]) for every i into answer(i, result), across the arena: large batches in
+    // coherent_order (query_batches.hpp), which finds the nodes and leaves a point walks in cache.
+    template <class Answer>
+    void nearest_batch(std::span<const Vec3d> points, double max_distance, Answer&& answer) const {
+        using namespace trace::queries;
+        const size_t n = points.size();
+        std::vector<uint32_t> order;
+        if (n >= kOrderedBatch && n <= std::numeric_limits<uint32_t>::max() && !wide.nodes.empty())
+            order = coherent_order(bounds, n, [&](size_t i) {
+                struct {
+                    Vec3 org;
+                } at{Vec3{float(points[i][0]), float(points[i][1]), float(points[i][2])}};
+                return at;
+            });
+        for_chunks(n, [&](size_t begin, size_t end) {
+            std::vector<Candidate> scratch;
+            for (size_t k = begin; k < end; ++k) {
+                const size_t i = order.empty() ? k : order[k];
+                answer(i, nearest(points[i], max_distance, scratch));
+            }
+        });
+    }
 };
 
 namespace {
@@ -79,7 +111,7 @@ ClosestPoint DistanceQueries::closest_point(const Vec3d& point, double max_dista
     check_point(point, 0);
     check_max_distance(max_distance);
     std::vector<Candidate> scratch;
-    return nearest_triangle(layout_->wide, layout_->triangles, point, max_distance, scratch);
+    return layout_->nearest(point, max_distance, scratch);
 }
 
 double DistanceQueries::distance(const Vec3d& point, double max_distance) const {
@@ -128,21 +160,13 @@ void DistanceQueries::closest_points(std::span<const Vec3d> points, std::span<Cl
                                      double max_distance) const {
     check_points(points, out.size());
     check_max_distance(max_distance);
-    trace::queries::for_chunks(points.size(), [&](size_t begin, size_t end) {
-        std::vector<Candidate> scratch;
-        for (size_t i = begin; i < end; ++i)
-            out[i] = nearest_triangle(layout_->wide, layout_->triangles, points[i], max_distance, scratch);
-    });
+    layout_->nearest_batch(points, max_distance, [&](size_t i, const ClosestPoint& c) { out[i] = c; });
 }
 
 void DistanceQueries::distances(std::span<const Vec3d> points, std::span<double> out, double max_distance) const {
     check_points(points, out.size());
     check_max_distance(max_distance);
-    trace::queries::for_chunks(points.size(), [&](size_t begin, size_t end) {
-        std::vector<Candidate> scratch;
-        for (size_t i = begin; i < end; ++i)
-            out[i] = nearest_triangle(layout_->wide, layout_->triangles, points[i], max_distance, scratch).distance;
-    });
+    layout_->nearest_batch(points, max_distance, [&](size_t i, const ClosestPoint& c) { out[i] = c.distance; });
 }
 
 void DistanceQueries::signed_distances(std::span<const Vec3d> points, std::span<double> out, SignRule rule) const {

@@ -77,6 +77,36 @@ private:
     Double8 p_[3];
 };
 
+typedef double Double4 __attribute__((vector_size(32)));
+typedef float Float4 __attribute__((vector_size(16)));
+typedef long long Mask4 __attribute__((vector_size(32)));
+
+// The lanes of a pack whose triangle's bounding box lies within `bound` (squared) of p: the box's
+// squared distance in double, scaled down as the nodes' (kBoxSlack), a lower bound of the triangle's.
+[[gnu::always_inline]] inline unsigned near_lanes(const TrianglePack& pack, const Vec3d& p, double bound) {
+    Double4 d2 = {};
+    for (int a = 0; a < 3; ++a) {
+        Float4 v0, v1, v2;
+        __builtin_memcpy(&v0, pack.vertex[0][a], sizeof v0);
+        __builtin_memcpy(&v1, pack.vertex[1][a], sizeof v1);
+        __builtin_memcpy(&v2, pack.vertex[2][a], sizeof v2);
+        Float4 lo = v0 < v1 ? v0 : v1, hi = v0 < v1 ? v1 : v0;
+        lo = lo < v2 ? lo : v2;
+        hi = hi < v2 ? v2 : hi;
+        const double c = p[size_t(a)];
+        const Double4 below = __builtin_convertvector(lo, Double4) - c,
+                      above = c - __builtin_convertvector(hi, Double4);
+        Double4 gap = below > above ? below : above;
+        gap = gap > 0.0 ? gap : Double4{};
+        d2 += gap * gap;
+    }
+    const Mask4 within = d2 * kBoxSlack <= bound;
+    unsigned lanes = 0;
+    for (int l = 0; l < 4; ++l)
+        if (within[l]) lanes |= 1u << l;
+    return lanes;
+}
+
 D3 d3(const Vec3& v) { return {double(v.x), double(v.y), double(v.z)}; }
 
 bool same_point(D3 a, D3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
@@ -143,8 +173,22 @@ bool within(const Candidate& c, const Triangle& t, D3 p, double max_distance) {
 
 }  // namespace
 
-ClosestPoint nearest_triangle(const WideLayout<8>& wide, std::span<const Triangle> triangles, const Vec3d& point,
-                              double max_distance, std::vector<Candidate>& candidates) {
+std::vector<TriangleConditioning> pack_conditioning(const WideLayout<8>& wide) {
+    std::vector<TriangleConditioning> out(wide.packs.size() * 4);
+    for (size_t i = 0; i < wide.packs.size(); ++i)
+        for (int l = 0; l < 4; ++l) {
+            const TrianglePack& pack = wide.packs[i];
+            const auto vertex = [&](int v) {
+                return D3{pack.vertex[v][0][l], pack.vertex[v][1][l], pack.vertex[v][2][l]};
+            };
+            out[4 * i + size_t(l)] = conditioning(vertex(0), vertex(1), vertex(2));
+        }
+    return out;
+}
+
+ClosestPoint nearest_triangle(const WideLayout<8>& wide, std::span<const TriangleConditioning> conditioning,
+                              std::span<const Triangle> triangles, const Vec3d& point, double max_distance,
+                              std::vector<Candidate>& candidates) {
     ClosestPoint result;
     if (wide.nodes.empty()) return result;
     const D3 p{point[0], point[1], point[2]};
@@ -155,16 +199,21 @@ ClosestPoint nearest_triangle(const WideLayout<8>& wide, std::span<const Triangl
     const TrianglePack* packs = wide.packs.data();
     const NearestQuery query(wide, point);
     walk(query, bound, [&](const PointEntry& leaf) {
-        for (uint32_t lane = 0; lane < leaf.count; ++lane) {
-            const TrianglePack& pack = packs[leaf.child + lane / 4];
-            const int l = int(lane % 4);
-            const D3 a{pack.vertex[0][0][l], pack.vertex[0][1][l], pack.vertex[0][2][l]};
-            const D3 b{pack.vertex[1][0][l], pack.vertex[1][1][l], pack.vertex[1][2][l]};
-            const D3 c{pack.vertex[2][0][l], pack.vertex[2][1][l], pack.vertex[2][2][l]};
-            const PointTriangle at = closest_on_triangle(p, a, b, c);
-            if (at.d2 - at.error > bound) continue;
-            candidates.push_back({pack.primitive[l], at});
-            bound = std::min(bound, at.d2 + at.error);
+        for (uint32_t first = 0; first < leaf.count; first += 4) {
+            const uint32_t index = leaf.child + first / 4;
+            const TrianglePack& pack = packs[index];
+            // The lanes whose triangle's box lies within the bound (a lower bound, as the nodes').
+            const unsigned lanes = near_lanes(pack, point, bound) & ((1u << std::min(4u, leaf.count - first)) - 1u);
+            for (unsigned m = lanes; m; m &= m - 1) {
+                const int l = __builtin_ctz(m);
+                const D3 a{pack.vertex[0][0][l], pack.vertex[0][1][l], pack.vertex[0][2][l]};
+                const D3 b{pack.vertex[1][0][l], pack.vertex[1][1][l], pack.vertex[1][2][l]};
+                const D3 c{pack.vertex[2][0][l], pack.vertex[2][1][l], pack.vertex[2][2][l]};
+                const PointTriangle at = closest_on_triangle(p, a, b, c, conditioning[4 * size_t(index) + size_t(l)]);
+                if (at.d2 - at.error > bound) continue;
+                candidates.push_back({pack.primitive[l], at});
+                bound = std::min(bound, at.d2 + at.error);
+            }
         }
         return false;
     });

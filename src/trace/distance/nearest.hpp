@@ -21,13 +21,18 @@ struct Candidate {
     PointTriangle at;
 };
 
+// The conditioning of each lane of each pack of the layout (packs[i] lane l: conditioning[4 i + l]),
+// computed once: what each triangle's error bound needs.
+std::vector<TriangleConditioning> pack_conditioning(const WideLayout<8>& wide);
+
 // Points of larger magnitude are refused (Error): their squared distances could overflow.
 inline constexpr double kMaxCoordinate = 0x1p400;
 
 // The nearest triangle of `wide` to p within max_distance (inclusive; infinity: no limit), decided
 // exactly, ties to the smaller id. `triangles` are the mesh's (the exact decision reads them);
 // `scratch` is reused between calls.
-ClosestPoint nearest_triangle(const WideLayout<8>& wide, std::span<const Triangle> triangles, const Vec3d& p,
-                              double max_distance, std::vector<Candidate>& scratch);
+ClosestPoint nearest_triangle(const WideLayout<8>& wide, std::span<const TriangleConditioning> conditioning,
+                              std::span<const Triangle> triangles, const Vec3d& p, double max_distance,
+                              std::vector<Candidate>& scratch);
 
 }  // namespace spacebvh::trace::distance

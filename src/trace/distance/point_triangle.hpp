@@ -29,9 +29,19 @@ struct D3 {
 // two) of differences of inputs, each difference rounded once, each dot product rounding three times;
 // 2^-48 (32 units of 2^-53) of the magnitude covers a dot product, 2^-46 the products of two.
 inline constexpr double kDotSlack = 0x1p-48, kProductSlack = 0x1p-46;
-// The error bound of a squared distance: kDistanceSlack * kappa * (|p - v0| + |v1 - v0| + |v2 - v0|)^2,
+// The error bound of a squared distance: kDistanceSlack * kappa * (|p - v0|^2 + (|v1 - v0| + |v2 - v0|)^2),
 // kappa = |e1||e2| / |e1 x e2| >= 1 (docs/distance.md). Past kMaxKappa the bound is the trivial one.
-inline constexpr double kDistanceSlack = 0x1p-40, kMaxKappa = 0x1p20;
+inline constexpr double kDistanceSlack = 0x1p-39, kMaxKappa = 0x1p20;
+
+// What the error bound needs of a triangle, computed once: kappa (0 past kMaxKappa) and |e1| + |e2|.
+struct TriangleConditioning {
+    double kappa, edges;
+};
+inline TriangleConditioning conditioning(D3 a, D3 b, D3 c) {
+    const D3 ab = sub(b, a), ac = sub(c, a), n = cross(ab, ac);
+    const double lab = std::sqrt(dot(ab, ab)), lac = std::sqrt(dot(ac, ac)), ln = std::sqrt(dot(n, n));
+    return {ln > lab * lac / kMaxKappa ? std::max(1.0, lab * lac / ln) : 0.0, lab + lac};
+}
 
 // A certified feature: what the closest point lies on, or kNone where the double arithmetic cannot
 // tell. Two triangles certified on the same vertex (or the same edge, by its two end points) are at
@@ -74,14 +84,11 @@ struct Dot {
 
 // Ericson's region walk (Real-Time Collision Detection, 5.1.5) in double, with the regions' dot
 // products certified against their error bounds. The triangle is not degenerate.
-[[gnu::always_inline]] inline PointTriangle closest_on_triangle(D3 p, D3 a, D3 b, D3 c) {
+[[gnu::always_inline]] inline PointTriangle closest_on_triangle(D3 p, D3 a, D3 b, D3 c, TriangleConditioning k) {
     PointTriangle r;
     const D3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-    const double lab = std::sqrt(dot(ab, ab)), lac = std::sqrt(dot(ac, ac)), lap = std::sqrt(dot(ap, ap));
-    const D3 n = cross(ab, ac);
-    const double ln = std::sqrt(dot(n, n)), scale = lap + lab + lac;
-    const double kappa = ln > lab * lac / kMaxKappa ? std::max(1.0, lab * lac / ln) : 0.0;
-    r.error = kappa > 0.0 ? kDistanceSlack * kappa * scale * scale : 2.0 * scale * scale;
+    const double scale2 = dot(ap, ap) + k.edges * k.edges;
+    r.error = k.kappa > 0.0 ? kDistanceSlack * k.kappa * scale2 : 4.0 * scale2;
     const Dot d1 = dot_with_slack(ab, ap), d2 = dot_with_slack(ac, ap);
     if (d1.value <= 0.0 && d2.value <= 0.0) {
         at_point(r, p, a, kVertex0, certainly_negative(d1) && certainly_negative(d2));
@@ -128,8 +135,9 @@ struct Dot {
     r.u = vb.value * denom;  // the weights of b and c
     r.v = vc.value * denom;
     r.point = axpy(axpy(a, r.u, ab), r.v, ac);
-    const double h = dot(ap, n);
-    r.d2 = ln > 0.0 ? h * h / (ln * ln) : dot(ap, ap);
+    const D3 n = cross(ab, ac);
+    const double h = dot(ap, n), nn = dot(n, n);
+    r.d2 = nn > 0.0 ? h * h / nn : dot(ap, ap);
     r.feature = kFace;
     return r;
 }
