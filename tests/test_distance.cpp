@@ -300,6 +300,7 @@ TEST(Distance, BadInputIsAnError) {
     EXPECT_THROW(queries.distance({nan, 0, 0}), Error);
     EXPECT_THROW(queries.distance({INFINITY, 0, 0}), Error);
     EXPECT_THROW(queries.distance({1e300, 0, 0}), Error);
+    EXPECT_THROW(queries.occupancy({1e39, 0, 0}), Error);  // beyond float32, where containment is decided
     EXPECT_THROW(queries.distance({0, 0, 0}, -1.0), Error);
     EXPECT_THROW(queries.distance({0, 0, 0}, nan), Error);
     EXPECT_THROW(queries.winding_number({0, 0, 0}, -1.0), Error);
