@@ -220,6 +220,34 @@ TEST(Distance, SharedBunnyMatchesTheExactReference) {
     check_against_reference(scene.triangles, queries, hostile_points(scene.triangles, 60, 3));
 }
 
+// Slivers (the third corner 2^-8 .. 2^-22 of the edge's length off its line), far from the origin,
+// with points near their lines, edges and vertices: the double bounds' hardest cases.
+TEST(Distance, SliversFarFromTheOriginMatchTheExactReference) {
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
+    std::vector<Triangle> slivers;
+    for (int i = 0; i < 120; ++i) {
+        const Vec3 a(float(1000 + 4 * sym(rng)), float(-2000 + 4 * sym(rng)), float(500 + 4 * sym(rng)));
+        const Vec3 e(float(sym(rng)), float(sym(rng)), float(sym(rng)));
+        const float off = std::ldexp(1.0f, -8 - int(rng() % 15));
+        const Vec3 b = a + e, c = a + e * float(unit(rng)) + Vec3(off * float(sym(rng)), off, -off);
+        slivers.push_back({a, b, c});
+    }
+    std::vector<Vec3d> points;
+    for (int i = 0; i < 400; ++i) {
+        const Triangle& t = slivers[rng() % slivers.size()];
+        const double s = 3.0 * sym(rng), jitter = std::ldexp(1.0, -int(rng() % 40));
+        Vec3d p;
+        for (int a = 0; a < 3; ++a)
+            p[size_t(a)] = t.v0[a] + s * (t.v1[a] - t.v0[a]) + jitter * sym(rng) + (i % 4 == 0 ? 0.0 : 0.01 * sym(rng));
+        points.push_back(p);
+    }
+    for (const std::string builder : {"binned", "spatial"}) {
+        const DistanceQueries queries(slivers, build_for(slivers, builder));
+        check_against_reference(slivers, queries, points);
+    }
+}
+
 #endif  // SPACEBVH_HAVE_GMP
 
 TEST(Distance, AnswersAreIdenticalOverRunsAndThreadCounts) {
