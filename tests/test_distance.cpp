@@ -220,18 +220,23 @@ TEST(Distance, SharedBunnyMatchesTheExactReference) {
     check_against_reference(scene.triangles, queries, hostile_points(scene.triangles, 60, 3));
 }
 
-// Slivers (the third corner 2^-8 .. 2^-22 of the edge's length off its line), far from the origin,
-// with points near their lines, edges and vertices: the double bounds' hardest cases.
+// Slivers (the third corner 2^-8 .. 2^-22 of the edge's length off its line) in fans around shared
+// edges, far from the origin, with points near their lines, edges and vertices: the double bounds'
+// hardest cases, and exact ties.
 TEST(Distance, SliversFarFromTheOriginMatchTheExactReference) {
     std::mt19937_64 rng(21);
     std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
     std::vector<Triangle> slivers;
-    for (int i = 0; i < 120; ++i) {
+    // Fans of four slivers around one edge each: points near the edge tie exactly between them.
+    for (int i = 0; i < 30; ++i) {
         const Vec3 a(float(1000 + 4 * sym(rng)), float(-2000 + 4 * sym(rng)), float(500 + 4 * sym(rng)));
         const Vec3 e(float(sym(rng)), float(sym(rng)), float(sym(rng)));
-        const float off = std::ldexp(1.0f, -8 - int(rng() % 15));
-        const Vec3 b = a + e, c = a + e * float(unit(rng)) + Vec3(off * float(sym(rng)), off, -off);
-        slivers.push_back({a, b, c});
+        const Vec3 b = a + e;
+        for (int k = 0; k < 4; ++k) {
+            const float off = std::ldexp(1.0f, -8 - int(rng() % 15));
+            const Vec3 c = a + e * float(unit(rng)) + Vec3(off * float(sym(rng)), off * float(sym(rng)), off);
+            slivers.push_back(k % 2 ? Triangle{a, b, c} : Triangle{b, a, c});
+        }
     }
     std::vector<Vec3d> points;
     for (int i = 0; i < 400; ++i) {
