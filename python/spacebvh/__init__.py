@@ -21,6 +21,7 @@ Example::
 from . import _core
 from ._core import (
     Bvh,
+    DistanceQueries,
     EmbreeTracer,
     Error,
     Quality,
@@ -55,6 +56,7 @@ __all__ = [
     "EmbreeTracer",
     "Error",
     "Quality",
+    "DistanceQueries",
     "RayQueries",
     "Scene",
     "Tracer",
