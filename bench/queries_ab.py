@@ -139,8 +139,10 @@ def compare_answers(args):
             files = {}
             for label, side in (("old", args.old), ("new", args.new)):
                 files[label] = os.path.join(folder, label + ".npz")
-                run_side(side, ["answers", scene, args.builders, str(args.rays), str(args.seed), str(args.threads),
-                                files[label]])
+                run_side(
+                    side,
+                    ["answers", scene, args.builders, str(args.rays), str(args.seed), str(args.threads), files[label]],
+                )
             old, new = np.load(files["old"]), np.load(files["new"])
             differ = sorted(set(old.files) ^ set(new.files))
             for key in sorted(set(old.files) & set(new.files)):
@@ -165,20 +167,35 @@ def compare_speed(args):
             order = ("old", "new") if run % 2 == 0 else ("new", "old")
             for label in order:
                 side = args.old if label == "old" else args.new
-                out = run_side(side, ["speed", scene, args.builders.split(",")[0], str(args.rays), str(args.seed),
-                                      str(args.threads), args.queries, str(args.repeat)])
+                out = run_side(
+                    side,
+                    [
+                        "speed",
+                        scene,
+                        args.builders.split(",")[0],
+                        str(args.rays),
+                        str(args.seed),
+                        str(args.threads),
+                        args.queries,
+                        str(args.repeat),
+                    ],
+                )
                 for query, (wall, cpu) in json.loads(out.strip().splitlines()[-1]).items():
                     times[label][query][0].append(wall)
                     times[label][query][1].append(cpu)
-        print(f"{scene} ({args.rays} rays, {args.threads} threads, median over {args.runs} runs of the best of "
-              f"{args.repeat}):")
+        print(
+            f"{scene} ({args.rays} rays, {args.threads} threads, median over {args.runs} runs of the best of "
+            f"{args.repeat}):"
+        )
         print("| query | old wall s | new wall s | new / old | old CPU s | new CPU s | new / old |")
         print("|---|---|---|---|---|---|---|")
         for query in wanted:
             old = [statistics.median(samples) for samples in times["old"][query]]
             new = [statistics.median(samples) for samples in times["new"][query]]
-            print(f"| {query} | {old[0]:.3f} | {new[0]:.3f} | {new[0] / old[0]:.3f} "
-                  f"| {old[1]:.3f} | {new[1]:.3f} | {new[1] / old[1]:.3f} |")
+            print(
+                f"| {query} | {old[0]:.3f} | {new[0]:.3f} | {new[0] / old[0]:.3f} "
+                f"| {old[1]:.3f} | {new[1]:.3f} | {new[1] / old[1]:.3f} |"
+            )
         sys.stdout.flush()
     return 0
 
