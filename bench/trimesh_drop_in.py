@@ -4,7 +4,9 @@
 Not a test: it times intersects_first, intersects_any, intersects_location (multiple hits) and
 contains_points on the bunny and crytek_sponza from the shared scenes ($SPACEBVH_SCENES, default
 ../shared/scenes beside the checkout) and prints rays per second and the ratios. Needs
-`pip install trimesh embreex` and spacebvh in the same environment.
+`pip install trimesh embreex` and spacebvh in the same environment; without embreex (or with
+`--overhead-only`) it prints only the drop-in's overhead: each drop-in query against the spacebvh
+call it wraps (Tracer.intersect, Tracer.occluded, RayQueries.all, RayQueries.contains), side by side.
 
     python bench/trimesh_drop_in.py [--rays 1000000] [--threads 2] [--scenes bunny crytek_sponza]
 
@@ -65,6 +67,54 @@ def timed_with_cpu(function, *args, **kwargs):
     return time.perf_counter() - start, time.process_time() - cpu_start, result
 
 
+def overhead(args):
+    """Each drop-in query against the spacebvh call it makes, on the same rays, side by side."""
+    print(f"drop-in overhead: {args.rays} rays, threads={args.threads}, medians of {max(args.repeat, 3)} runs")
+    for name in args.scenes:
+        path = SCENES / name / f"{name}.obj"
+        if not path.exists():
+            print(f"skipping {name}: no {path}")
+            continue
+        overhead_on(name, *read_obj(path), args)
+
+
+def overhead_on(name, vertices, faces, args):
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    ray = drop_in.RayMeshIntersector(mesh, builder=args.builder, threads=args.threads)
+    o, d = rays_for(mesh, args.rays, 1)
+    points = rays_for(mesh, args.rays, 2)[0]
+    tracer, queries = ray.tracer, ray.queries
+    pairs = [
+        ("intersects_first", lambda: ray.intersects_first(o, d), lambda: tracer.intersect(o, d)),
+        ("intersects_any", lambda: ray.intersects_any(o, d), lambda: tracer.occluded(o, d)),
+        (
+            "intersects_location (single)",
+            lambda: ray.intersects_location(o, d, multiple_hits=False),
+            lambda: tracer.intersect(o, d),
+        ),
+        (
+            "intersects_location (multiple)",
+            lambda: ray.intersects_location(o, d, multiple_hits=True),
+            lambda: queries.all(o, d, max_hits=100, details=False),
+        ),
+        ("contains_points", lambda: ray.contains_points(points), lambda: queries.contains(points)),
+    ]
+    print(f"\n{name}: {len(faces)} triangles")
+    for label, wrapped, core in pairs:
+        # In turn, first one then the other first, so that both see the same load; medians printed.
+        runs = []
+        for run in range(max(args.repeat, 3)):
+            runs.append(
+                (timed(wrapped)[0], timed(core)[0])
+                if run % 2 == 0
+                else tuple(reversed((timed(core)[0], timed(wrapped)[0])))
+            )
+        runs = np.median(np.array(runs), axis=0)
+        print(
+            f"  {label:31s} drop-in {runs[0]:6.3f} s   core {runs[1]:6.3f} s   drop-in / core {runs[0] / runs[1]:5.2f}"
+        )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rays", type=int, default=1_000_000)
@@ -72,10 +122,17 @@ def main():
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
     parser.add_argument("--builder", default="binned")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each query pair; medians are printed")
+    parser.add_argument("--overhead-only", action="store_true", help="only the drop-in against the calls it wraps")
     args = parser.parse_args()
-
-    import embreex
-    import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
+    overhead(args)
+    if args.overhead_only:
+        return
+    try:
+        import embreex
+        import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401
+    except ImportError:
+        print("\nno embreex: trimesh's Embree backend is not compared (pip install embreex)")
+        return
 
     print(
         f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "

@@ -98,7 +98,6 @@ class RayMeshIntersector:
             self._cache = {}
             if len(faces) != 0:
                 self._cache["bvh"] = _core.build(_core.mesh(vertices, faces), self._builder)
-                self._cache["triangles"] = vertices[faces.astype(np.int64)]
             self._key = key
         return self._cache
 
@@ -118,14 +117,6 @@ class RayMeshIntersector:
     def tracer(self) -> Optional[Any]:
         """The ``spacebvh.Tracer`` of the current mesh (contacts; None for a mesh without faces)."""
         return self._made("tracer", _core.Tracer)
-
-    def _contact_locations(self, origins: np.ndarray, directions: np.ndarray, primitive: np.ndarray) -> np.ndarray:
-        """Where each ray meets the plane of its contact triangle, in double precision from the mesh's
-        triangle (the contact's triangle never contains the ray's line, so the plane is crossed)."""
-        corners = self._current()["triangles"][primitive]
-        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        t = np.einsum("ij,ij->i", normal, corners[:, 0] - origins) / np.einsum("ij,ij->i", normal, directions)
-        return origins + t[:, None] * directions
 
     # -- trimesh's interface ---------------------------------------------------------------------
     def intersects_id(
@@ -152,11 +143,11 @@ class RayMeshIntersector:
                 origins, directions, max_hits=max(int(max_hits), 0), points=return_locations, details=False
             )
         else:
-            primitive = self.tracer.intersect(origins, directions)[1]
+            _t, primitive, u, v = self.tracer.intersect(origins, directions)
             index_ray = np.flatnonzero(primitive >= 0)
             index_tri = primitive[index_ray]
-            if return_locations:
-                locations = self._contact_locations(origins[index_ray], directions[index_ray], index_tri)
+            if return_locations:  # in double from the triangle, at the contact's barycentrics
+                locations = self.tracer.scene.hit_points(index_tri, u[index_ray], v[index_ray])
         if return_locations:
             return index_tri, index_ray, locations
         return index_tri, index_ray
@@ -200,9 +191,10 @@ class RayMeshIntersector:
         if queries is None or len(points) == 0:
             return result
         bounds = np.asarray(self.mesh.bounds, dtype=np.float64)
-        inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
-        if inside_box.all():
+        # Two reductions settle the common case (every point in the box) without a mask per point.
+        if np.all(points.min(axis=0) >= bounds[0]) and np.all(points.max(axis=0) <= bounds[1]):
             return queries.contains(points)
+        inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
         if inside_box.any():
             result[inside_box] = queries.contains(points[inside_box])
         return result
