@@ -17,7 +17,7 @@ if command -v ccache >/dev/null; then
   export CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 fi
 start=$SECONDS
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests,reproduce]"
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests,open3d-tests,reproduce]"
 echo "pip install . took $((SECONDS - start)) s"
 rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.
