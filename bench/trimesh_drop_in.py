@@ -17,32 +17,14 @@ is the one that can be wrong (float32, re-query offsets, parity noise).
 """
 
 import argparse
-import os
 import time
-from pathlib import Path
 
 import numpy as np
 import trimesh
+from shared_scenes import SCENES, read_obj
 
 import spacebvh
 import spacebvh.trimesh as drop_in
-
-ROOT = Path(__file__).resolve().parent.parent
-SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
-
-
-def read_obj(path):
-    """Vertices and triangles of a plain OBJ (`v` records; `f` with the first index of each corner), as
-    the scene collection's MANIFEST.md describes them; trimesh's loader needs Pillow for their materials."""
-    vertices, faces = [], []
-    with open(path) as lines:
-        for line in lines:
-            if line.startswith("v "):
-                vertices.append(line.split()[1:4])
-            elif line.startswith("f "):
-                faces.append([int(corner.split("/")[0]) for corner in line.split()[1:4]])
-    faces = np.array(faces, dtype=np.int64)
-    return np.array(vertices, dtype=np.float64), np.where(faces > 0, faces - 1, faces + len(vertices))
 
 
 def rays_for(mesh, count, seed):
