@@ -149,14 +149,16 @@ class RaycastingScene:
             starts = np.cumsum([0] + [len(v) for v, _ in self._geometries])[:-1]
             faces = np.concatenate([f + s for (_, f), s in zip(self._geometries, starts)])
             cache["bvh"] = _core.build(_core.mesh(vertices, faces), threads=self._build_threads)
-            cache["geometry"] = np.repeat(np.arange(len(counts), dtype=np.uint32), counts)
-            cache["primitive"] = np.concatenate([np.arange(c, dtype=np.uint32) for c in counts])
+            # Per combined triangle, with one more row for "no triangle" (index -1): INVALID_ID and a
+            # zero normal, so that one gather maps hits and misses alike.
+            invalid = np.array([INVALID_ID], dtype=np.uint32)
+            cache["geometry"] = np.concatenate([np.repeat(np.arange(len(counts), dtype=np.uint32), counts), invalid])
+            cache["primitive"] = np.concatenate([np.arange(c, dtype=np.uint32) for c in counts] + [invalid])
             corners = vertices.astype(np.float64)[faces]
             normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
             length = np.linalg.norm(normals, axis=1, keepdims=True)
-            cache["normals"] = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0).astype(
-                np.float32
-            )
+            unit = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+            cache["normals"] = np.vstack([unit, np.zeros((1, 3))]).astype(np.float32)
         self._cache = cache
         return cache
 
@@ -176,21 +178,20 @@ class RaycastingScene:
                 cache[key] = {"tracer": _core.Tracer, "crossings": _core.RayQueries}[kind](cache["bvh"])
         return cache[key]
 
-    def _ids(self, triangle: np.ndarray, hit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Geometry and primitive ids (uint32, INVALID_ID where not hit) of combined triangle numbers."""
-        geometry = np.full(triangle.shape, INVALID_ID, dtype=np.uint32)
-        primitive = np.full(triangle.shape, INVALID_ID, dtype=np.uint32)
-        if hit.any():
-            cache = self._scene()
-            geometry[hit] = cache["geometry"][triangle[hit]]
-            primitive[hit] = cache["primitive"][triangle[hit]]
-        return geometry, primitive
+    def _ids(self, triangle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Geometry and primitive ids (uint32) of combined triangle numbers (-1: INVALID_ID)."""
+        cache = self._scene()
+        if "geometry" not in cache:
+            invalid = np.full(triangle.shape, INVALID_ID, dtype=np.uint32)
+            return invalid, invalid.copy()
+        return cache["geometry"][triangle], cache["primitive"][triangle]
 
-    def _normals(self, triangle: np.ndarray, hit: np.ndarray) -> np.ndarray:
-        normals = np.zeros(triangle.shape + (3,), dtype=np.float32)
-        if hit.any():
-            normals[hit] = self._scene()["normals"][triangle[hit]]
-        return normals
+    def _normals(self, triangle: np.ndarray) -> np.ndarray:
+        """Unit normals (float32) of combined triangle numbers (-1: zero)."""
+        cache = self._scene()
+        if "normals" not in cache:
+            return np.zeros(triangle.shape + (3,), dtype=np.float32)
+        return cache["normals"][triangle]
 
     # -- rays ------------------------------------------------------------------------------------
     def cast_rays(self, rays: Any, nthreads: int = 0) -> dict:
@@ -205,16 +206,15 @@ class RaycastingScene:
         uvs = np.zeros((count, 2), dtype=np.float32)
         if tracer is not None and count:
             t_hit, triangle, u, v = tracer.intersect(rows[:, :3], rows[:, 3:], threads=threads)
-            t = t_hit.astype(np.float32)
+            t = t_hit.astype(np.float32, copy=False)
             uvs = np.stack([u, v], axis=1).astype(np.float32)
-        hit = triangle >= 0
-        geometry, primitive = self._ids(triangle, hit)
+        geometry, primitive = self._ids(triangle)
         return {
             "t_hit": _out(t.reshape(shape)),
             "geometry_ids": _out(geometry.reshape(shape)),
             "primitive_ids": _out(primitive.reshape(shape)),
             "primitive_uvs": _out(uvs.reshape(shape + (2,))),
-            "primitive_normals": _out(self._normals(triangle, hit).reshape(shape + (3,))),
+            "primitive_normals": _out(self._normals(triangle).reshape(shape + (3,))),
         }
 
     def test_occlusions(self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0) -> Any:
@@ -249,7 +249,7 @@ class RaycastingScene:
             index_ray, triangle, t, u, v, _ = queries.all(rows[:, :3], rows[:, 3:], points=False, threads=threads)
         splits = np.zeros(len(rows) + 1, dtype=np.uint32)
         np.cumsum(np.bincount(index_ray, minlength=len(rows)), out=splits[1:])
-        geometry, primitive = self._ids(triangle, np.ones(len(triangle), dtype=bool))
+        geometry, primitive = self._ids(triangle)
         return {
             "ray_splits": _out(splits),
             "ray_ids": _out(index_ray.astype(np.uint32)),
@@ -277,15 +277,14 @@ class RaycastingScene:
         rows, shape, queries = self._points(query_points, "distance", nthreads)
         answer = queries.closest_points(rows)
         triangle = answer["triangle_ids"].astype(np.int64)
-        hit = answer["triangle_ids"] != INVALID_ID
-        triangle[~hit] = -1
-        geometry, primitive = self._ids(triangle, hit)
+        triangle[answer["triangle_ids"] == INVALID_ID] = -1
+        geometry, primitive = self._ids(triangle)
         return {
             "points": _out(answer["points"].astype(np.float32).reshape(shape + (3,))),
             "geometry_ids": _out(geometry.reshape(shape)),
             "primitive_ids": _out(primitive.reshape(shape)),
             "primitive_uvs": _out(answer["barycentrics"].astype(np.float32).reshape(shape + (2,))),
-            "primitive_normals": _out(self._normals(triangle, hit).reshape(shape + (3,))),
+            "primitive_normals": _out(self._normals(triangle).reshape(shape + (3,))),
         }
 
     def compute_distance(self, query_points: Any, nthreads: int = 0) -> Any:
