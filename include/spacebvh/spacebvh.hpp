@@ -7,6 +7,7 @@
 #include "spacebvh/build.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/cost_model.hpp"
+#include "spacebvh/distance.hpp"
 #include "spacebvh/error.hpp"
 #include "spacebvh/float64.hpp"
 #include "spacebvh/geometry.hpp"

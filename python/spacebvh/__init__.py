@@ -21,6 +21,7 @@ Example::
 from . import _core
 from ._core import (
     Bvh,
+    DistanceQueries,
     Error,
     Quality,
     RayQueries,
@@ -60,6 +61,7 @@ __all__ = [
     "Bvh",
     "Error",
     "Quality",
+    "DistanceQueries",
     "RayQueries",
     "Scene",
     "Tracer",

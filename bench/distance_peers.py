@@ -1,0 +1,169 @@
+# SPDX-License-Identifier: MIT
+"""spacebvh's point queries against Open3D's RaycastingScene and libigl: the same points, one run.
+
+Not a test: it times closest points, distance and signed distance on the bunny and crytek_sponza from
+the shared scenes ($SPACEBVH_SCENES, default ../shared/scenes beside the checkout), prints points per
+second and the ratios, then counts each library's wrong answers against ours (exact nearest triangle,
+docs/distance.md) on hostile sets: a lattice through a subdivided box's faces, edges and vertices,
+and points on the surfaces. Needs `pip install open3d-cpu==0.20.0 libigl==2.6.3` (Open3D also needs
+Debian's libusb-1.0-0 and libgomp1) and spacebvh in the same environment.
+
+    python bench/distance_peers.py [--points 1000000] [--threads 2] [--scenes bunny crytek_sponza]
+
+Points: uniform in the scene's bounding box grown by a tenth on each side (seeded). Tree and scene
+builds are timed apart from the queries; each query is timed three times, the median printed.
+"""
+
+import argparse
+import os
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+import spacebvh
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
+
+
+def median_seconds(function, *args, repeats=3):
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = function(*args)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def indexed_mesh(scene):
+    """Vertices (shared) and faces of a spacebvh scene's triangles, as libigl's signs need."""
+    corners = np.asarray(scene.triangles(), dtype=np.float64).reshape(-1, 3)
+    vertices, inverse = np.unique(corners, axis=0, return_inverse=True)
+    return vertices, inverse.reshape(-1, 3).astype(np.int64)
+
+
+def grid_box(n):
+    """A closed box [0, 2n]^3 of n x n quads per face (outward), and a lattice of step 1/2 through it."""
+    grid = np.arange(n + 1, dtype=np.float64) * 2.0
+    u, v = (a.ravel() for a in np.meshgrid(grid, grid, indexing="ij"))
+    vertices, faces = [], []
+    cells = np.array([(i * (n + 1) + j) for i in range(n) for j in range(n)])
+    for axis in range(3):
+        for side in (0, 1):
+            plane = np.zeros((len(u), 3))
+            plane[:, axis] = 2.0 * n * side
+            plane[:, (axis + 1) % 3], plane[:, (axis + 2) % 3] = u, v
+            base = len(vertices) and sum(len(x) for x in vertices)
+            vertices.append(plane)
+            a, b, c, d = base + cells, base + cells + n + 1, base + cells + n + 2, base + cells + 1
+            if side == 0:
+                b, d = d, b
+            faces.append(np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]))
+    r = np.arange(-1.0, 2 * n + 1.25, 0.5)
+    lattice = np.stack(np.meshgrid(r, r, r, indexing="ij"), axis=-1).reshape(-1, 3)
+    return np.concatenate(vertices), np.concatenate(faces), lattice
+
+
+class Peers:
+    """Each library's distance, signed distance and closest points on one mesh."""
+
+    def __init__(self, vertices, faces, threads):
+        import igl
+        import open3d as o3d
+
+        self.o3d, self.igl, self.threads = o3d, igl, threads
+        self.V, self.F = vertices, faces
+        self.scene = o3d.t.geometry.RaycastingScene()
+        self.scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)), o3d.core.Tensor(faces.astype(np.uint32)))
+
+    def open3d(self, what, points):
+        p = self.o3d.core.Tensor(points.astype(np.float32))
+        if what == "closest":
+            return self.scene.compute_closest_points(p, nthreads=self.threads)["points"].numpy()
+        if what == "distance":
+            return self.scene.compute_distance(p, nthreads=self.threads).numpy()
+        return self.scene.compute_signed_distance(p, nthreads=self.threads).numpy()
+
+    def libigl(self, what, points):
+        if what == "signed":
+            return self.igl.signed_distance(points, self.V, self.F)[0]
+        d2, _, closest = self.igl.point_mesh_squared_distance(points, self.V, self.F)
+        return closest if what == "closest" else np.sqrt(d2)
+
+
+def ours(queries, what, points):
+    if what == "closest":
+        return queries.closest_points(points)["points"]
+    if what == "distance":
+        return queries.distance(points)
+    return queries.signed_distance(points)
+
+
+def time_scene(name, count, threads):
+    scene = spacebvh.load_scene(str(SCENES / name / f"{name}.obj"))
+    start = time.perf_counter()
+    queries = spacebvh.DistanceQueries(spacebvh.build(scene, "spatial"), threads=threads)
+    print(f"{name}: {scene.triangles().shape[0]} triangles, our tree {time.perf_counter() - start:.2f} s")
+    vertices, faces = indexed_mesh(scene)
+    peers = Peers(vertices, faces, threads)
+    lo, hi = (np.array(b) for b in scene.bounds)
+    grow = (hi - lo) * 0.1
+    points = np.random.default_rng(1).uniform(lo - grow, hi + grow, (count, 3))
+    for what in ("closest", "distance", "signed"):
+        ours_s, _ = median_seconds(ours, queries, what, points)
+        o3d_s, _ = median_seconds(peers.open3d, what, points)
+        line = f"  {what:9s} ours {count / ours_s / 1e6:6.2f} Mpt/s  Open3D x{o3d_s / ours_s:5.2f}"
+        if what != "distance" or count <= 200_000:
+            igl_s, _ = median_seconds(peers.libigl, what, points, repeats=1)
+            line += f"  libigl x{igl_s / ours_s:6.2f}"
+        print(line, flush=True)
+
+
+def wrong_answers(name, vertices, faces, points, threads):
+    """Each library's answers that differ from ours: distance beyond 1e-6 of the mesh's size, or the
+    other side (signed distance of a point off the surface)."""
+    scene = spacebvh.mesh(vertices.astype(np.float32), faces)
+    queries = spacebvh.DistanceQueries(spacebvh.build(scene, "spatial"), threads=threads)
+    exact = queries.distance(points)
+    signed = queries.signed_distance(points)
+    tolerance = 1e-6 * float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
+    peers = Peers(vertices.astype(np.float32).astype(np.float64), faces, threads)
+    off = exact > tolerance
+    for library in ("open3d", "libigl"):
+        answer = getattr(peers, library)
+        distance = np.abs(answer("distance", points) - exact) > tolerance
+        other_side = off & (np.sign(answer("signed", points)) != np.sign(signed))
+        print(
+            f"  {name:24s} {library:7s} distance wrong {int(distance.sum()):6d}, sign wrong "
+            f"{int(other_side.sum()):6d} of {len(points)}"
+        )
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--points", type=int, default=1_000_000)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    args = parser.parse_args()
+    for name in args.scenes:
+        time_scene(name, args.points, args.threads)
+    print("wrong answers against ours (exact nearest triangle):")
+    vertices, faces, lattice = grid_box(3)
+    wrong_answers("box lattice", vertices, faces, lattice, args.threads)
+    rotation = np.linalg.qr(np.random.default_rng(2).normal(size=(3, 3)))[0]
+    wrong_answers("rotated box lattice", vertices @ rotation.T, faces, lattice @ rotation.T, args.threads)
+    if (SCENES / "bunny" / "bunny.obj").exists():
+        scene = spacebvh.load_scene(str(SCENES / "bunny" / "bunny.obj"))
+        v, f = indexed_mesh(scene)
+        rng = np.random.default_rng(4)
+        tri = v[f[rng.integers(0, len(f), 20000)]]
+        u = rng.uniform(0, 1, (20000, 1))
+        w = rng.uniform(0, 1, (20000, 1)) * (1 - u)
+        on_surface = tri[:, 0] + u * (tri[:, 1] - tri[:, 0]) + w * (tri[:, 2] - tri[:, 0])
+        wrong_answers("bunny surface points", v, f, on_surface, args.threads)
+
+
+if __name__ == "__main__":
+    main()
