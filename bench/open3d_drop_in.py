@@ -13,8 +13,8 @@ whose exact answers are known by construction:
 - a box subdivided into an n x n grid per face, rays along the axes through its interior grid
   vertices and edge lines: 2 crossings each, and the first contact at the face (cast_rays, t exact);
   rays running in the planes of faces and along the box's edges: a contact (cast_rays hits);
-- points on a lattice through the box's grid (inside, outside, never on the surface): occupancy and
-  the sign of the signed distance.
+- points on a lattice through the box's grid: on the surface, a distance of 0; inside or outside,
+  occupancy and the sign of the signed distance.
 
     python bench/open3d_drop_in.py [--count 1000000] [--threads 2] [--repeat 3] [--scenes bunny crytek_sponza]
 
@@ -39,29 +39,22 @@ def scenes_of(vertices, faces):
     return ours, theirs
 
 
-def queries(has_distance):
+def queries():
     """(label, call) of every query: call(scene, rays, points, threads)."""
-    listed = [
+    return [
         ("cast_rays", lambda s, r, p, n: s.cast_rays(r, nthreads=n)),
         ("test_occlusions", lambda s, r, p, n: s.test_occlusions(r, nthreads=n)),
         ("count_intersections", lambda s, r, p, n: s.count_intersections(r, nthreads=n)),
         ("list_intersections", lambda s, r, p, n: s.list_intersections(r, nthreads=n)),
         ("compute_occupancy", lambda s, r, p, n: s.compute_occupancy(p, nthreads=n)),
+        ("compute_closest_points", lambda s, r, p, n: s.compute_closest_points(p, nthreads=n)),
+        ("compute_distance", lambda s, r, p, n: s.compute_distance(p, nthreads=n)),
+        ("compute_signed_distance", lambda s, r, p, n: s.compute_signed_distance(p, nthreads=n)),
     ]
-    if has_distance:
-        listed += [
-            ("compute_closest_points", lambda s, r, p, n: s.compute_closest_points(p, nthreads=n)),
-            ("compute_distance", lambda s, r, p, n: s.compute_distance(p, nthreads=n)),
-            ("compute_signed_distance", lambda s, r, p, n: s.compute_signed_distance(p, nthreads=n)),
-        ]
-    return listed
 
 
 def speed(args):
     rows = []
-    has_distance = hasattr(spacebvh._core, "DistanceQueries")
-    if not has_distance:
-        print("(this build has no DistanceQueries: closest points and distances are not timed)")
     for name in args.scenes:
         path = SCENES / name / f"{name}.obj"
         if not path.exists():
@@ -77,10 +70,10 @@ def speed(args):
         their_rays, their_points = o3d.core.Tensor(rays), o3d.core.Tensor(points)
         # Builds (at the first query of each kind: contacts, crossings, distances) apart from the timings.
         for scene, r, p in ((ours, rays, points), (theirs, their_rays, their_points)):
-            for _label, call in queries(has_distance):
+            for _label, call in queries():
                 call(scene, r[:1], p[:1], args.threads)
         print(f"\n{name}: {len(faces)} triangles, {args.count} rays/points, {args.threads} threads")
-        for label, call in queries(has_distance):
+        for label, call in queries():
             runs = []
             for run in range(args.repeat):
                 order = [(theirs, their_rays, their_points), (ours, rays, points)]
@@ -210,14 +203,17 @@ def hostile(args):
 
     steps = np.arange(-2, 2 * args.grid + 3) / (2 * args.grid)
     points = np.stack(np.meshgrid(steps, steps, steps, indexing="ij"), axis=-1).reshape(-1, 3)
+    on_surface = np.any((points == 0) | (points == 1), axis=1) & np.all((points >= 0) & (points <= 1), axis=1)
+    surface = o3d.core.Tensor(points[on_surface].astype(np.float32))
+    distance = (np.asarray(ours.compute_distance(surface.numpy())), theirs.compute_distance(surface).numpy())
+    wrong(f"grid box: compute_distance == 0, {len(surface)} lattice points on the surface", *distance, 0.0)
     points = points[~np.any((points == 0) | (points == 1), axis=1)].astype(np.float32)  # never on the surface
     inside = np.all((points > 0) & (points < 1), axis=1)
     their = o3d.core.Tensor(points)
     occupancy = (np.asarray(ours.compute_occupancy(points)), theirs.compute_occupancy(their).numpy())
     wrong(f"grid box: compute_occupancy, {len(points)} lattice points", *(o == 1 for o in occupancy), inside)
-    if hasattr(spacebvh._core, "DistanceQueries"):
-        signed = (np.asarray(ours.compute_signed_distance(points)), theirs.compute_signed_distance(their).numpy())
-        wrong("grid box: compute_signed_distance < 0, lattice points", *(s < 0 for s in signed), inside)
+    signed = (np.asarray(ours.compute_signed_distance(points)), theirs.compute_signed_distance(their).numpy())
+    wrong("grid box: compute_signed_distance < 0, lattice points", *(s < 0 for s in signed), inside)
 
 
 def main():

@@ -162,21 +162,16 @@ class RaycastingScene:
         self._cache = cache
         return cache
 
-    def _query(self, kind: str, threads: int = 0) -> Optional[Any]:
-        """The tracer (contacts), ray queries (crossings) or distance queries (on ``threads`` threads,
-        which their calls do not take) of the scene; None when it has no triangles."""
+    def _query(self, kind: str) -> Optional[Any]:
+        """The tracer (contacts), ray queries (crossings) or distance queries of the scene, made at
+        first use; None when it has no triangles."""
         cache = self._scene()
         if "bvh" not in cache:
             return None
-        key = (kind, threads) if kind == "distance" else kind
-        if key not in cache:
-            if kind == "distance":
-                if not hasattr(_core, "DistanceQueries"):
-                    raise NotImplementedError("this build of spacebvh has no DistanceQueries (closest points)")
-                cache[key] = _core.DistanceQueries(cache["bvh"], threads=threads)
-            else:
-                cache[key] = {"tracer": _core.Tracer, "crossings": _core.RayQueries}[kind](cache["bvh"])
-        return cache[key]
+        if kind not in cache:
+            make = {"tracer": _core.Tracer, "crossings": _core.RayQueries, "distance": _core.DistanceQueries}[kind]
+            cache[kind] = make(cache["bvh"])
+        return cache[kind]
 
     def _ids(self, triangle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Geometry and primitive ids (uint32) of combined triangle numbers (-1: INVALID_ID)."""
@@ -260,13 +255,12 @@ class RaycastingScene:
         }
 
     # -- points ----------------------------------------------------------------------------------
-    def _points(self, query_points: Any, kind: str, nthreads: int) -> tuple[np.ndarray, tuple[int, ...], Any]:
+    def _points(self, query_points: Any, kind: str) -> tuple[np.ndarray, tuple[int, ...], Any]:
         rows, shape = _last_dim(query_points, 3, "query_points")
-        threads = _threads(nthreads)
         bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
         if len(bad):
             raise ValueError(f"query_points: point {bad[0]} is not finite: {rows[bad[0]]}")
-        queries = self._query(kind, threads)
+        queries = self._query(kind)
         if queries is None:
             raise ValueError(f"the scene has no triangles: add_triangles() first ({len(self._geometries)} added)")
         return rows, shape, queries
@@ -274,8 +268,8 @@ class RaycastingScene:
     def compute_closest_points(self, query_points: Any, nthreads: int = 0) -> dict:
         """The nearest point of the scene to each point: ``points``, ``geometry_ids``, ``primitive_ids``,
         ``primitive_uvs`` (barycentrics of the 2nd and 3rd corners), ``primitive_normals``."""
-        rows, shape, queries = self._points(query_points, "distance", nthreads)
-        answer = queries.closest_points(rows)
+        rows, shape, queries = self._points(query_points, "distance")
+        answer = queries.closest_points(rows, threads=_threads(nthreads))
         triangle = answer["triangle_ids"].astype(np.int64)
         triangle[answer["triangle_ids"] == INVALID_ID] = -1
         geometry, primitive = self._ids(triangle)
@@ -289,21 +283,23 @@ class RaycastingScene:
 
     def compute_distance(self, query_points: Any, nthreads: int = 0) -> Any:
         """The distance of each point to the scene: float32 (...)."""
-        rows, shape, queries = self._points(query_points, "distance", nthreads)
-        return _out(queries.distance(rows).astype(np.float32).reshape(shape))
+        rows, shape, queries = self._points(query_points, "distance")
+        return _out(queries.distance(rows, threads=_threads(nthreads)).astype(np.float32).reshape(shape))
 
     def compute_signed_distance(self, query_points: Any, nthreads: int = 0, nsamples: int = 1) -> Any:
         """The distance of each point to the scene, negative inside (the exact parity of crossings):
         float32 (...). ``nsamples`` is accepted and changes nothing."""
         _check_nsamples(nsamples)
-        rows, shape, queries = self._points(query_points, "distance", nthreads)
-        return _out(queries.signed_distance(rows, sign="parity").astype(np.float32).reshape(shape))
+        rows, shape, queries = self._points(query_points, "distance")
+        return _out(
+            queries.signed_distance(rows, sign="parity", threads=_threads(nthreads)).astype(np.float32).reshape(shape)
+        )
 
     def compute_occupancy(self, query_points: Any, nthreads: int = 0, nsamples: int = 1) -> Any:
         """1.0 where a point is inside (the exact parity of crossings), else 0.0: float32 (...).
         ``nsamples`` is accepted and changes nothing."""
         _check_nsamples(nsamples)
-        rows, shape, queries = self._points(query_points, "crossings", nthreads)
+        rows, shape, queries = self._points(query_points, "crossings")
         return _out(queries.contains(rows, threads=_threads(nthreads)).astype(np.float32).reshape(shape))
 
     # -- cameras ---------------------------------------------------------------------------------

@@ -62,9 +62,9 @@ def test_two_workers_answer_as_one_process(cluster_queries):
     inside = queries.contains(p).compute()
     assert np.array_equal(inside, crossings.contains(points))
     assert 0 < inside.sum() < len(points)  # both answers occur
-    if hasattr(spacebvh._core, "DistanceQueries"):
-        distances = spacebvh._core.DistanceQueries(bvh)
-        assert np.array_equal(queries.signed_distance(p).compute(), distances.signed_distance(points))
+    distances = spacebvh.DistanceQueries(bvh)
+    assert np.array_equal(queries.signed_distance(p).compute(), distances.signed_distance(points))
+    assert np.array_equal(queries.distance(p).compute(), distances.distance(points))
 
     # Each worker loaded the tree once, whatever the chunks and calls it served; both served some.
     loads = queries.client.run(lambda: __import__("spacebvh.dask").dask._load_count)

@@ -200,7 +200,6 @@ def box_distance(points, lo=0.0, hi=1.0):
     return np.where(inside > 0, -inside, outside)
 
 
-@pytest.mark.skipif(not hasattr(spacebvh._core, "DistanceQueries"), reason="this build has no DistanceQueries")
 def test_distances_of_a_box(numpy_only):
     scene, _ = box_scene()
     rng = np.random.default_rng(9)
