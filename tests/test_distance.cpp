@@ -220,6 +220,39 @@ TEST(Distance, SharedBunnyMatchesTheExactReference) {
     check_against_reference(scene.triangles, queries, hostile_points(scene.triangles, 60, 3));
 }
 
+// Slivers (the third corner 2^-8 .. 2^-22 of the edge's length off its line) in fans around shared
+// edges, far from the origin, with points near their lines, edges and vertices: the double bounds'
+// hardest cases, and exact ties.
+TEST(Distance, SliversFarFromTheOriginMatchTheExactReference) {
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
+    std::vector<Triangle> slivers;
+    // Fans of four slivers around one edge each: points near the edge tie exactly between them.
+    for (int i = 0; i < 30; ++i) {
+        const Vec3 a(float(1000 + 4 * sym(rng)), float(-2000 + 4 * sym(rng)), float(500 + 4 * sym(rng)));
+        const Vec3 e(float(sym(rng)), float(sym(rng)), float(sym(rng)));
+        const Vec3 b = a + e;
+        for (int k = 0; k < 4; ++k) {
+            const float off = std::ldexp(1.0f, -8 - int(rng() % 15));
+            const Vec3 c = a + e * float(unit(rng)) + Vec3(off * float(sym(rng)), off * float(sym(rng)), off);
+            slivers.push_back(k % 2 ? Triangle{a, b, c} : Triangle{b, a, c});
+        }
+    }
+    std::vector<Vec3d> points;
+    for (int i = 0; i < 400; ++i) {
+        const Triangle& t = slivers[rng() % slivers.size()];
+        const double s = 3.0 * sym(rng), jitter = std::ldexp(1.0, -int(rng() % 40));
+        Vec3d p;
+        for (int a = 0; a < 3; ++a)
+            p[size_t(a)] = t.v0[a] + s * (t.v1[a] - t.v0[a]) + jitter * sym(rng) + (i % 4 == 0 ? 0.0 : 0.01 * sym(rng));
+        points.push_back(p);
+    }
+    for (const std::string builder : {"binned", "spatial"}) {
+        const DistanceQueries queries(slivers, build_for(slivers, builder));
+        check_against_reference(slivers, queries, points);
+    }
+}
+
 #endif  // SPACEBVH_HAVE_GMP
 
 TEST(Distance, AnswersAreIdenticalOverRunsAndThreadCounts) {
@@ -300,6 +333,7 @@ TEST(Distance, BadInputIsAnError) {
     EXPECT_THROW(queries.distance({nan, 0, 0}), Error);
     EXPECT_THROW(queries.distance({INFINITY, 0, 0}), Error);
     EXPECT_THROW(queries.distance({1e300, 0, 0}), Error);
+    EXPECT_THROW(queries.occupancy({1e39, 0, 0}), Error);  // beyond float32, where containment is decided
     EXPECT_THROW(queries.distance({0, 0, 0}, -1.0), Error);
     EXPECT_THROW(queries.distance({0, 0, 0}, nan), Error);
     EXPECT_THROW(queries.winding_number({0, 0, 0}, -1.0), Error);

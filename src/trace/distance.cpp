@@ -97,6 +97,15 @@ D3 as_d3(const Vec3d& p) { return {p[0], p[1], p[2]}; }
 
 Vec3 as_float(const Vec3d& p) { return {float(p[0]), float(p[1]), float(p[2])}; }
 
+// The point rounded to float for containment, which needs it within float's range.
+Vec3 float_point(const Vec3d& p, size_t index) {
+    check_point(p, index);
+    const Vec3 rounded = as_float(p);
+    if (!is_finite(rounded))
+        throw Error("distance: occupancy of point " + std::to_string(index) + " beyond float32's range");
+    return rounded;
+}
+
 }  // namespace
 
 DistanceQueries::DistanceQueries(std::span<const Triangle> triangles, const Bvh& bvh)
@@ -134,7 +143,7 @@ double DistanceQueries::signed_distance(const Vec3d& point, SignRule rule) const
     const double d = distance(point);
     if (d == 0.0 || std::isinf(d)) return d;
     const bool inside = rule == SignRule::parity
-                            ? layout_->rays.contains(as_float(point))
+                            ? layout_->rays.contains(float_point(point, 0))
                             : inside_by_winding(layout_->winding, layout_->triangles, as_d3(point));
     return inside ? -d : d;
 }
@@ -151,10 +160,7 @@ std::pair<double, double> DistanceQueries::winding_number_bound(const Vec3d& poi
     return layout_->winding.direct(layout_->triangles, as_d3(point));
 }
 
-bool DistanceQueries::occupancy(const Vec3d& point) const {
-    check_point(point, 0);
-    return layout_->rays.contains(as_float(point));
-}
+bool DistanceQueries::occupancy(const Vec3d& point) const { return layout_->rays.contains(float_point(point, 0)); }
 
 void DistanceQueries::closest_points(std::span<const Vec3d> points, std::span<ClosestPoint> out,
                                      double max_distance) const {
@@ -197,7 +203,7 @@ void DistanceQueries::winding_numbers(std::span<const Vec3d> points, std::span<d
 void DistanceQueries::occupancies(std::span<const Vec3d> points, std::span<uint8_t> out) const {
     check_points(points, out.size());
     std::vector<Vec3> rounded(points.size());
-    for (size_t i = 0; i < points.size(); ++i) rounded[i] = as_float(points[i]);
+    for (size_t i = 0; i < points.size(); ++i) rounded[i] = float_point(points[i], i);
     layout_->rays.contains(rounded, out);
 }
 

@@ -25,10 +25,11 @@ struct D3 {
 }
 [[gnu::always_inline]] inline D3 axpy(D3 a, double s, D3 b) { return {a.x + s * b.x, a.y + s * b.y, a.z + s * b.z}; }
 
-// The relative slack of the certifying predicates: each value below is a dot product (or a product of
-// two) of differences of inputs, each difference rounded once, each dot product rounding three times;
-// 2^-48 (32 units of 2^-53) of the magnitude covers a dot product, 2^-46 the products of two.
-inline constexpr double kDotSlack = 0x1p-48, kProductSlack = 0x1p-46;
+// The relative slack of the certifying predicates: each is a dot product (or a difference of products
+// of two, cross_term) of differences of inputs, each difference rounded once, each dot product
+// rounding three times; 2^-48 (32 units of 2^-53) of the sum of its terms' magnitudes covers a dot
+// product.
+inline constexpr double kDotSlack = 0x1p-48;
 // The error bound of a squared distance: kDistanceSlack * kappa * (|p - v0|^2 + (|v1 - v0| + |v2 - v0|)^2),
 // kappa = |e1||e2| / |e1 x e2| >= 1 (docs/distance.md). Past kMaxKappa the bound is the trivial one.
 inline constexpr double kDistanceSlack = 0x1p-39, kMaxKappa = 0x1p20;
@@ -65,10 +66,15 @@ struct Dot {
     double value, slack;
 };
 [[gnu::always_inline]] inline Dot dot_with_slack(D3 a, D3 b) { return {dot(a, b), dot_magnitude(a, b) * kDotSlack}; }
-// x * y - z * w and the bound of its error.
+// x * y - z * w and the bound of its error: each factor errs by its slack (x' y' - x y is within
+// x.slack |y'| + y.slack |x'| + x.slack y.slack), and the two products and the difference round
+// once each (relative 2^-53; 2^-50 taken).
 [[gnu::always_inline]] inline Dot cross_term(Dot x, Dot y, Dot z, Dot w) {
-    const auto bound = [](Dot a) { return std::fabs(a.value) + a.slack; };
-    return {x.value * y.value - z.value * w.value, (bound(x) * bound(y) + bound(z) * bound(w)) * kProductSlack};
+    const auto product_slack = [](Dot a, Dot b) {
+        return a.slack * std::fabs(b.value) + b.slack * std::fabs(a.value) + a.slack * b.slack +
+               0x1p-50 * std::fabs(a.value * b.value);
+    };
+    return {x.value * y.value - z.value * w.value, 2.0 * (product_slack(x, y) + product_slack(z, w))};
 }
 [[gnu::always_inline]] inline bool certainly_positive(Dot x) { return x.value > x.slack; }
 [[gnu::always_inline]] inline bool certainly_negative(Dot x) { return x.value < -x.slack; }
