@@ -4,7 +4,9 @@
 Not a test: it times intersects_first, intersects_any, intersects_location (multiple hits) and
 contains_points on the bunny and crytek_sponza from the shared scenes ($SPACEBVH_SCENES, default
 ../shared/scenes beside the checkout) and prints rays per second and the ratios. Needs
-`pip install trimesh embreex` and spacebvh in the same environment.
+`pip install trimesh embreex` and spacebvh in the same environment; without embreex (or with
+`--overhead-only`) it prints only the drop-in's overhead: each drop-in query against the spacebvh
+call it wraps (Tracer.intersect, Tracer.occluded, RayQueries.all, RayQueries.contains), side by side.
 
     python bench/trimesh_drop_in.py [--rays 1000000] [--threads 2] [--scenes bunny crytek_sponza]
 
@@ -15,32 +17,14 @@ is the one that can be wrong (float32, re-query offsets, parity noise).
 """
 
 import argparse
-import os
 import time
-from pathlib import Path
 
 import numpy as np
 import trimesh
+from shared_scenes import SCENES, read_obj
 
 import spacebvh
 import spacebvh.trimesh as drop_in
-
-ROOT = Path(__file__).resolve().parent.parent
-SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
-
-
-def read_obj(path):
-    """Vertices and triangles of a plain OBJ (`v` records; `f` with the first index of each corner), as
-    the scene collection's MANIFEST.md describes them; trimesh's loader needs Pillow for their materials."""
-    vertices, faces = [], []
-    with open(path) as lines:
-        for line in lines:
-            if line.startswith("v "):
-                vertices.append(line.split()[1:4])
-            elif line.startswith("f "):
-                faces.append([int(corner.split("/")[0]) for corner in line.split()[1:4]])
-    faces = np.array(faces, dtype=np.int64)
-    return np.array(vertices, dtype=np.float64), np.where(faces > 0, faces - 1, faces + len(vertices))
 
 
 def rays_for(mesh, count, seed):
@@ -65,6 +49,54 @@ def timed_with_cpu(function, *args, **kwargs):
     return time.perf_counter() - start, time.process_time() - cpu_start, result
 
 
+def overhead(args):
+    """Each drop-in query against the spacebvh call it makes, on the same rays, side by side."""
+    print(f"drop-in overhead: {args.rays} rays, threads={args.threads}, medians of {max(args.repeat, 3)} runs")
+    for name in args.scenes:
+        path = SCENES / name / f"{name}.obj"
+        if not path.exists():
+            print(f"skipping {name}: no {path}")
+            continue
+        overhead_on(name, *read_obj(path), args)
+
+
+def overhead_on(name, vertices, faces, args):
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    ray = drop_in.RayMeshIntersector(mesh, builder=args.builder, threads=args.threads)
+    o, d = rays_for(mesh, args.rays, 1)
+    points = rays_for(mesh, args.rays, 2)[0]
+    tracer, queries = ray.tracer, ray.queries
+    pairs = [
+        ("intersects_first", lambda: ray.intersects_first(o, d), lambda: tracer.intersect(o, d)),
+        ("intersects_any", lambda: ray.intersects_any(o, d), lambda: tracer.occluded(o, d)),
+        (
+            "intersects_location (single)",
+            lambda: ray.intersects_location(o, d, multiple_hits=False),
+            lambda: tracer.intersect(o, d),
+        ),
+        (
+            "intersects_location (multiple)",
+            lambda: ray.intersects_location(o, d, multiple_hits=True),
+            lambda: queries.all(o, d, max_hits=100, details=False),
+        ),
+        ("contains_points", lambda: ray.contains_points(points), lambda: queries.contains(points)),
+    ]
+    print(f"\n{name}: {len(faces)} triangles")
+    for label, wrapped, core in pairs:
+        # In turn, first one then the other first, so that both see the same load; medians printed.
+        runs = []
+        for run in range(max(args.repeat, 3)):
+            runs.append(
+                (timed(wrapped)[0], timed(core)[0])
+                if run % 2 == 0
+                else tuple(reversed((timed(core)[0], timed(wrapped)[0])))
+            )
+        runs = np.median(np.array(runs), axis=0)
+        print(
+            f"  {label:31s} drop-in {runs[0]:6.3f} s   core {runs[1]:6.3f} s   drop-in / core {runs[0] / runs[1]:5.2f}"
+        )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rays", type=int, default=1_000_000)
@@ -72,10 +104,17 @@ def main():
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
     parser.add_argument("--builder", default="binned")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each query pair; medians are printed")
+    parser.add_argument("--overhead-only", action="store_true", help="only the drop-in against the calls it wraps")
     args = parser.parse_args()
-
-    import embreex
-    import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401  (fails loudly without embreex)
+    overhead(args)
+    if args.overhead_only:
+        return
+    try:
+        import embreex
+        import trimesh.ray.ray_pyembree as embree_backend  # noqa: F401
+    except ImportError:
+        print("\nno embreex: trimesh's Embree backend is not compared (pip install embreex)")
+        return
 
     print(
         f"trimesh {trimesh.__version__}, embreex {embreex.__version__}, spacebvh {spacebvh.__version__}; "

@@ -17,7 +17,11 @@ if command -v ccache >/dev/null; then
   export CMAKE_CXX_COMPILER_LAUNCHER=ccache CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 fi
 start=$SECONDS
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip ".[test,trimesh-tests,reproduce]"
+# The developers' install: -march=native, Embree (EmbreeTracer, Embree's trees) and the command-line
+# tool, which the self-contained wheel (pyproject.toml's defaults, scripts/test-wheel.sh) leaves out.
+developer=(-C cmake.define.SPACEBVH_NATIVE=ON -C cmake.define.SPACEBVH_WITH_EMBREE=ON -C cmake.define.SPACEBVH_BUILD_APPS=ON)
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip "${developer[@]}" \
+  ".[test,trimesh-tests,open3d-tests,reproduce]"
 echo "pip install . took $((SECONDS - start)) s"
 rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.

@@ -22,7 +22,6 @@ from . import _core
 from ._core import (
     Bvh,
     DistanceQueries,
-    EmbreeTracer,
     Error,
     Quality,
     RayQueries,
@@ -49,11 +48,17 @@ from ._core import (
 )
 from .cli import executable as cli_executable
 
+# Embree 3's own tracer, the yardstick: in builds with Embree (the source install), not in the
+# self-contained wheel. `spacebvh.has_embree` says which.
+has_embree: bool = hasattr(_core, "EmbreeTracer")
+if has_embree:
+    EmbreeTracer = _core.EmbreeTracer
+
 __version__: str = _core.__version__
 
 __all__ = [
+    "has_embree",
     "Bvh",
-    "EmbreeTracer",
     "Error",
     "Quality",
     "DistanceQueries",
@@ -81,3 +86,5 @@ __all__ = [
     "write_png",
     "write_rays",
 ]
+if has_embree:
+    __all__.append("EmbreeTracer")

@@ -4,14 +4,21 @@
 ``RayMeshIntersector(mesh)`` answers trimesh's five ray queries (``intersects_id``,
 ``intersects_location``, ``intersects_first``, ``intersects_any``, ``contains_points``) with the
 same arguments, keywords, return tuples and dtypes as trimesh's Embree backend, from spacebvh's exact
-queries (docs/queries.md):
+queries (docs/queries.md). Each query has one of two documented semantics:
 
-- a ray through a shared edge or vertex of a connected surface crosses it exactly once, decided by a
-  fixed symbolic perturbation of the ray, not by an epsilon or a re-query loop;
-- multiple hits are every crossing, sorted by ray and then by distance (at most ``max_hits``);
-- ``contains_points`` is an exact parity count, the same on every run and thread count;
-- float64 meshes keep their precision at large coordinates (they are traced in a frame centred on
-  their bounds), and hit locations are computed from the triangle in double precision.
+- **contacts** (``intersects_first``, ``intersects_any``, and ``intersects_id`` /
+  ``intersects_location`` with ``multiple_hits=False``): triangles are closed, so a ray that only
+  touches the mesh at an edge or a vertex, or runs in the plane of a face to its boundary, hits it,
+  from every side. Answered by spacebvh's ``Tracer`` (the exact arbiter of docs/rays.md): the nearest
+  contact, ties to the lower triangle id;
+- **crossings** (``intersects_id`` / ``intersects_location`` with multiple hits, and
+  ``contains_points``): a ray through a shared edge or vertex of a connected surface crosses it exactly
+  once, decided by a fixed symbolic perturbation of the ray, not by an epsilon or a re-query loop;
+  multiple hits are every crossing, sorted by ray and then by distance (at most ``max_hits``), and
+  ``contains_points`` is an exact parity count, the same on every run and thread count.
+
+float64 meshes keep their precision at large coordinates (they are traced in a frame centred on
+their bounds), and hit locations are computed from the triangle in double precision.
 
 ``patch()`` routes trimesh's Embree backend to this intersector, so ``trimesh.Trimesh`` objects made
 afterwards (with the default ``use_embree=True``) use it; meshes made with ``use_embree=False`` keep
@@ -72,7 +79,7 @@ class RayMeshIntersector:
         self._builder = builder
         self._threads = threads
         self._key: Optional[Any] = None
-        self._queries: Optional[Any] = None
+        self._cache: dict = {}
 
     # -- the tree, cached on the mesh's content --------------------------------------------------
     def _mesh_key(self) -> Any:
@@ -81,20 +88,35 @@ class RayMeshIntersector:
         except Exception:  # a mesh-like object without trimesh's content hash
             return (id(self.mesh.vertices), id(self.mesh.faces))
 
-    @property
-    def queries(self) -> Optional[Any]:
-        """The ``spacebvh.RayQueries`` of the current mesh (None for a mesh without faces)."""
+    def _current(self) -> dict:
+        """The tree of the current mesh and the query objects made over it so far (rebuilt when the
+        mesh changes; empty for a mesh without faces)."""
         key = self._mesh_key()
         if self._key != key:
             vertices = np.asarray(self.mesh.vertices, dtype=np.float64)
             faces = np.asarray(self.mesh.faces)
-            if len(faces) == 0:
-                self._queries = None
-            else:
-                scene = _core.mesh(vertices, faces)
-                self._queries = _core.RayQueries(_core.build(scene, self._builder), threads=self._threads)
+            self._cache = {}
+            if len(faces) != 0:
+                self._cache["bvh"] = _core.build(_core.mesh(vertices, faces), self._builder)
             self._key = key
-        return self._queries
+        return self._cache
+
+    def _made(self, name: str, make: Any) -> Optional[Any]:
+        """The query object ``name`` of the current mesh, made by ``make(bvh, threads=...)`` on first use."""
+        cache = self._current()
+        if "bvh" in cache and name not in cache:
+            cache[name] = make(cache["bvh"], threads=self._threads)
+        return cache.get(name)
+
+    @property
+    def queries(self) -> Optional[Any]:
+        """The ``spacebvh.RayQueries`` of the current mesh (crossings; None for a mesh without faces)."""
+        return self._made("queries", _core.RayQueries)
+
+    @property
+    def tracer(self) -> Optional[Any]:
+        """The ``spacebvh.Tracer`` of the current mesh (contacts; None for a mesh without faces)."""
+        return self._made("tracer", _core.Tracer)
 
     # -- trimesh's interface ---------------------------------------------------------------------
     def intersects_id(
@@ -108,30 +130,31 @@ class RayMeshIntersector:
     ):
         """Triangles hit by rays: ``(index_tri, index_ray)``, with ``locations`` third when
         ``return_locations``. With ``multiple_hits`` every crossing (at most ``max_hits`` per ray,
-        the nearest), sorted by ray and then by distance; else the first crossing of each ray."""
+        the nearest), sorted by ray and then by distance; else the nearest contact of each ray
+        (closed triangles: touching an edge or vertex counts)."""
         origins, directions = _rays(ray_origins, ray_directions)
-        queries = self.queries
-        if queries is None or len(origins) == 0:
+        if "bvh" not in self._current() or len(origins) == 0:
             empty = np.zeros(0, dtype=np.int64)
             if return_locations:
                 return empty, empty.copy(), np.zeros((0, 3), dtype=np.float64)
             return empty, empty.copy()
         if multiple_hits:
-            index_ray, index_tri, _t, _u, _v, locations = queries.all(
+            index_ray, index_tri, _t, _u, _v, locations = self.queries.all(
                 origins, directions, max_hits=max(int(max_hits), 0), points=return_locations, details=False
             )
         else:
-            _t, primitive, _u, _v, points = queries.first(origins, directions)
-            hit = primitive >= 0
-            index_ray = np.nonzero(hit)[0].astype(np.int64)
-            index_tri = primitive[hit]
-            locations = points[hit]
+            _t, primitive, u, v = self.tracer.intersect(origins, directions)
+            index_ray = np.flatnonzero(primitive >= 0)
+            index_tri = primitive[index_ray]
+            if return_locations:  # in double from the triangle, at the contact's barycentrics
+                locations = self.tracer.scene.hit_points(index_tri, u[index_ray], v[index_ray])
         if return_locations:
             return index_tri, index_ray, locations
         return index_tri, index_ray
 
     def intersects_location(self, ray_origins: Any, ray_directions: Any, multiple_hits: bool = True, **kwargs: Any):
-        """Where rays hit: ``(locations (m, 3) float64, index_ray (m,) int64, index_tri (m,) int64)``."""
+        """Where rays hit: ``(locations (m, 3) float64, index_ray (m,) int64, index_tri (m,) int64)``;
+        every crossing with ``multiple_hits``, else the nearest contact (as ``intersects_id``)."""
         index_tri, index_ray, locations = self.intersects_id(
             ray_origins=ray_origins,
             ray_directions=ray_directions,
@@ -142,20 +165,21 @@ class RayMeshIntersector:
         return locations, index_ray, index_tri
 
     def intersects_first(self, ray_origins: Any, ray_directions: Any, **kwargs: Any) -> np.ndarray:
-        """The first triangle each ray crosses: ``(n,)`` int64, -1 on a miss."""
+        """The triangle of each ray's nearest contact (closed triangles; ties to the lower id):
+        ``(n,)`` int64, -1 on a miss."""
         origins, directions = _rays(ray_origins, ray_directions)
-        queries = self.queries
-        if queries is None or len(origins) == 0:
+        tracer = self.tracer
+        if tracer is None or len(origins) == 0:
             return np.full(len(origins), -1, dtype=np.int64)
-        return queries.first_primitive(origins, directions)
+        return tracer.intersect(origins, directions)[1]
 
     def intersects_any(self, ray_origins: Any, ray_directions: Any, **kwargs: Any) -> np.ndarray:
-        """Whether each ray crosses the surface: ``(n,)`` bool."""
+        """Whether each ray touches the mesh (closed triangles: an edge or a vertex counts): ``(n,)`` bool."""
         origins, directions = _rays(ray_origins, ray_directions)
-        queries = self.queries
-        if queries is None or len(origins) == 0:
+        tracer = self.tracer
+        if tracer is None or len(origins) == 0:
             return np.zeros(len(origins), dtype=bool)
-        return queries.any(origins, directions)
+        return tracer.occluded(origins, directions)
 
     def contains_points(self, points: Any) -> np.ndarray:
         """Whether each point is inside the mesh: ``(n,)`` bool, by an exact parity count along a fixed
@@ -167,9 +191,10 @@ class RayMeshIntersector:
         if queries is None or len(points) == 0:
             return result
         bounds = np.asarray(self.mesh.bounds, dtype=np.float64)
-        inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
-        if inside_box.all():
+        # Two reductions settle the common case (every point in the box) without a mask per point.
+        if np.all(points.min(axis=0) >= bounds[0]) and np.all(points.max(axis=0) <= bounds[1]):
             return queries.contains(points)
+        inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
         if inside_box.any():
             result[inside_box] = queries.contains(points[inside_box])
         return result
@@ -178,7 +203,7 @@ class RayMeshIntersector:
     def __getstate__(self):
         state = self.__dict__.copy()
         state["_key"] = None
-        state["_queries"] = None
+        state["_cache"] = {}
         return state
 
     def __setstate__(self, state):

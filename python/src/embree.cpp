@@ -3,9 +3,16 @@
 // (rtcIntersect1 / rtcOccluded1) or 16-wide packets (rtcIntersect16 / rtcOccluded16). Embree is not
 // watertight: near edges and vertices its answers may differ from ours (the arbiter of rays.md
 // settles such cases in our favour).
+// A build without Embree (SPACEBVH_WITH_EMBREE off: the self-contained wheel) has no EmbreeTracer.
 #include <optional>
 
 #include "bindings.hpp"
+
+#ifndef SPACEBVH_WITH_EMBREE
+namespace spacebvh::python {
+void bind_embree(py::module_&) {}
+}  // namespace spacebvh::python
+#else
 #include "spacebvh/tools/embree_scene.hpp"
 
 namespace spacebvh::python {
@@ -81,3 +88,4 @@ void bind_embree(py::module_& m) {
 }
 
 }  // namespace spacebvh::python
+#endif
