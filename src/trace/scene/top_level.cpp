@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: MIT
+// The top level of a scene: built by our binned builder over its geometries' boxes, refitted in place.
+#include "trace/scene/top_level.hpp"
+
+#include "spacebvh/build.hpp"
+
+namespace spacebvh::scene {
+
+namespace {
+
+// Each node's padding: the largest of the items below it (children follow their parent).
+void pad_nodes(TopLevel& top, std::span<const TopLevelItem> items) {
+    top.padding.assign(top.bvh.nodes.size(), Padding{});
+    for (size_t n = top.bvh.nodes.size(); n-- > 0;) {
+        const BvhNode& node = top.bvh.nodes[n];
+        Padding& p = top.padding[n];
+        const auto take = [&](const Padding& q) {
+            p.pad0 = std::max(p.pad0, q.pad0);
+            p.pad1 = std::max(p.pad1, q.pad1);
+        };
+        if (node.is_leaf()) {
+            for (uint32_t k = 0; k < node.reference_count; ++k) take(items[top.bvh.primitives[node.first + k]].padding);
+        } else {
+            take(top.padding[node.first]);
+            take(top.padding[node.first + 1]);
+        }
+    }
+}
+
+}  // namespace
+
+TopLevel build_top_level(std::span<const TopLevelItem> items) {
+    // One triangle per box with two opposite corners as vertices: its bounds are the box exactly, and
+    // the object-partitioning binned builder never clips it, so each item is in exactly one leaf.
+    std::vector<Triangle> boxes(items.size());
+    for (size_t i = 0; i < items.size(); ++i) {
+        const AABB& b = items[i].box;
+        boxes[i] = {b.lo, b.hi, Vec3{b.lo.x, b.hi.y, b.lo.z}};
+    }
+    BuildConfig config = BuildConfig::for_preset(Preset::binned);
+    // Visiting an item costs a whole walk of its own tree: few items per leaf.
+    config.cost.intersection_cost = 4.0f;
+    config.limits.max_leaf_size = 4;
+    TopLevel top;
+    top.bvh = build(MeshView(boxes).named("top level"), config);
+    pad_nodes(top, items);
+    return top;
+}
+
+void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
+    for (size_t n = top.bvh.nodes.size(); n-- > 0;) {
+        BvhNode& node = top.bvh.nodes[n];
+        AABB box;
+        if (node.is_leaf()) {
+            for (uint32_t k = 0; k < node.reference_count; ++k) box.extend(items[top.bvh.primitives[node.first + k]].box);
+        } else {
+            box = merge(top.bvh.nodes[node.first].bounds, top.bvh.nodes[node.first + 1].bounds);
+        }
+        node.bounds = box;
+    }
+    pad_nodes(top, items);
+}
+
+void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles) {
+    for (size_t n = bvh.nodes.size(); n-- > 0;) {
+        BvhNode& node = bvh.nodes[n];
+        AABB box;
+        if (node.is_leaf()) {
+            for (uint32_t k = 0; k < node.reference_count; ++k) box.extend(triangles[bvh.primitives[node.first + k]].bounds());
+        } else {
+            box = merge(bvh.nodes[node.first].bounds, bvh.nodes[node.first + 1].bounds);
+        }
+        node.bounds = box;
+    }
+}
+
+}  // namespace spacebvh::scene
