@@ -50,9 +50,9 @@ struct Level {
 };
 
 struct Placement {
-    std::vector<Affine> forward;                  // top level first
+    std::vector<Affine> forward;                    // top level first
     std::vector<scene::InstanceTransform> inverse;  // the same, as tracing takes rays in
-    std::vector<uint32_t> masks;                  // the instances' masks, then the mesh's
+    std::vector<uint32_t> masks;                    // the instances' masks, then the mesh's
     std::array<uint32_t, kMaxInstanceLevels> path{kInvalidIndex, kInvalidIndex, kInvalidIndex, kInvalidIndex};
     uint32_t geometry = kInvalidIndex;
     const std::vector<Triangle>* triangles = nullptr;

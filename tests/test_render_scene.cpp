@@ -97,11 +97,12 @@ void check_rays(const RenderScene& scene, const std::vector<Placement>& all, con
         const bool agrees = tools::hits_agree(record_of(hits[i]), record_of(truth), rays[i], diagonal);
         if (!agrees || bool(blocked[i]) != truth.is_hit()) {
             if (tally.wrong++ < 4)
-                tally.text << "ray " << i << ": t " << hits[i].t << " vs " << truth.t << ", occluded " << int(blocked[i])
-                           << "; ";
+                tally.text << "ray " << i << ": t " << hits[i].t << " vs " << truth.t << ", occluded "
+                           << int(blocked[i]) << "; ";
         }
         if (hits[i].is_hit() && !not_a_crossing(all, hits[i], rays[i], diagonal).empty()) {
-            if (tally.misnamed++ < 4) tally.text << "ray " << i << ": " << not_a_crossing(all, hits[i], rays[i], diagonal);
+            if (tally.misnamed++ < 4)
+                tally.text << "ray " << i << ": " << not_a_crossing(all, hits[i], rays[i], diagonal);
         }
         tally.flat_disagree += !tools::hits_agree(record_of(hits[i]), record_of(flat_truth), rays[i], diagonal);
     }

@@ -35,8 +35,8 @@ struct Affine {
 };
 
 struct SceneHit {
-    float t = kInfinity;  // world units: the parameter of the ray as given (units of |dir|), see docs/scenes.md
-    float u = 0.0f, v = 0.0f;            // barycentrics of v1 and v2 in the mesh's own triangle
+    float t = kInfinity;       // world units: the parameter of the ray as given (units of |dir|), see docs/scenes.md
+    float u = 0.0f, v = 0.0f;  // barycentrics of v1 and v2 in the mesh's own triangle
     uint32_t primitive = kInvalidIndex;  // triangle id in the mesh's order; kInvalidIndex for a miss
     uint32_t geometry = kInvalidIndex;   // the mesh's id in the scene that holds it
     // Instance ids from the traced scene down, then kInvalidIndex: instance[0] is an id of the traced
@@ -120,8 +120,8 @@ public:
     const std::string& name() const;
     const SceneConfig& config() const;
     bool committed() const;
-    AABB bounds() const;          // of the committed top level (empty before)
-    uint32_t depth() const;       // instance levels below this scene: 0 with meshes only
+    AABB bounds() const;            // of the committed top level (empty before)
+    uint32_t depth() const;         // instance levels below this scene: 0 with meshes only
     size_t geometry_count() const;  // attached meshes and instances
     size_t memory_bytes() const;    // layouts of the meshes, top level, transforms
 

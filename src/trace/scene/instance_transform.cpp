@@ -49,7 +49,8 @@ Matrix inverse_of(const Matrix& a, double& det) {
 
 double norm_inf(const Matrix& a) {
     double best = 0.0;
-    for (int r = 0; r < 3; ++r) best = std::max(best, std::fabs(a[3 * r]) + std::fabs(a[3 * r + 1]) + std::fabs(a[3 * r + 2]));
+    for (int r = 0; r < 3; ++r)
+        best = std::max(best, std::fabs(a[3 * r]) + std::fabs(a[3 * r + 1]) + std::fabs(a[3 * r + 2]));
     return best;
 }
 
@@ -94,9 +95,8 @@ void place_box(InstanceTransform& xf, const AABB& child_box, Padding child) {
     // ray is near the box (there |t dir| <= 2 (|org| + R)), with margins for the double arithmetic.
     constexpr double u = 0x1p-23;
     const double nb = norm_inf(back), ni = norm_inf(ai);
-    const double shift =
-        std::max({std::fabs(double(xf.inverse_shift[0])), std::fabs(double(xf.inverse_shift[1])),
-                  std::fabs(double(xf.inverse_shift[2]))});
+    const double shift = std::max({std::fabs(double(xf.inverse_shift[0])), std::fabs(double(xf.inverse_shift[1])),
+                                   std::fabs(double(xf.inverse_shift[2]))});
     const double r = max_abs(xf.box);
     const double c0 = child.pad0 + 0x1p-29 * max_abs(child_box), c1 = child.pad1 + 0x1p-29;
     xf.padding.pad0 = 1.01 * nb * (c0 + c1 * shift + u * (shift + 2.0 * ni * r));
@@ -118,8 +118,8 @@ InstanceTransform make_instance_transform(const Affine& transform, const AABB& c
     Matrix rounded;
     for (int i = 0; i < 9; ++i) rounded[i] = xf.inverse[i] = float(inv[i]);
     for (int i = 0; i < 3; ++i)
-        xf.inverse_shift[i] = float(-(inv[3 * i] * transform.m[3] + inv[3 * i + 1] * transform.m[7] +
-                                      inv[3 * i + 2] * transform.m[11]));
+        xf.inverse_shift[i] =
+            float(-(inv[3 * i] * transform.m[3] + inv[3 * i + 1] * transform.m[7] + inv[3 * i + 2] * transform.m[11]));
     bool finite = true;
     for (float x : xf.inverse) finite = finite && std::isfinite(x) && (x == 0.0f || std::fabs(x) >= 0x1p-126f);
     for (float x : xf.inverse_shift) finite = finite && std::isfinite(x);

@@ -22,10 +22,10 @@ struct Padding {
 };
 
 struct InstanceTransform {
-    std::array<float, 9> inverse{};         // A^-1 rounded to float, row-major
-    std::array<float, 3> inverse_shift{};   // -(A^-1 b) rounded to float
-    AABB box;                               // the child's box in the parent's space, rounded outward
-    Padding padding;                        // of box, for rays in the parent's space
+    std::array<float, 9> inverse{};        // A^-1 rounded to float, row-major
+    std::array<float, 3> inverse_shift{};  // -(A^-1 b) rounded to float
+    AABB box;                              // the child's box in the parent's space, rounded outward
+    Padding padding;                       // of box, for rays in the parent's space
 };
 
 // Validates `transform` and derives the above for a child whose root box is `child_box` with root
@@ -47,7 +47,8 @@ inline Ray to_instance(const InstanceTransform& xf, const Ray& ray) {
     for (int i = 0; i < 3; ++i) {
         const double ox = double(a[3 * i]) * ray.org.x + double(a[3 * i + 1]) * ray.org.y +
                           double(a[3 * i + 2]) * ray.org.z + double(xf.inverse_shift[i]);
-        const double dx = double(a[3 * i]) * ray.dir.x + double(a[3 * i + 1]) * ray.dir.y + double(a[3 * i + 2]) * ray.dir.z;
+        const double dx =
+            double(a[3 * i]) * ray.dir.x + double(a[3 * i + 1]) * ray.dir.y + double(a[3 * i + 2]) * ray.dir.z;
         out.org[i] = float(ox);
         out.dir[i] = float(dx);
     }

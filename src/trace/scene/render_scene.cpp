@@ -202,8 +202,8 @@ AABB RenderScene::bounds() const { return impl_->committed ? impl_->bounds : AAB
 uint32_t RenderScene::depth() const { return impl_->depth; }
 
 size_t RenderScene::geometry_count() const {
-    return size_t(std::count_if(impl_->geometries.begin(), impl_->geometries.end(),
-                                [](const Geometry& g) { return g.alive(); }));
+    return size_t(
+        std::count_if(impl_->geometries.begin(), impl_->geometries.end(), [](const Geometry& g) { return g.alive(); }));
 }
 
 size_t RenderScene::memory_bytes() const {

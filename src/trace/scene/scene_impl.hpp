@@ -19,12 +19,12 @@ namespace spacebvh {
 namespace scene {
 
 struct MeshRecord {
-    MeshView view;                  // the caller's buffers, read again by refit
+    MeshView view;  // the caller's buffers, read again by refit
     TreeRecipe recipe;
-    Bvh bvh;                        // kept for refit and for filtered walks
+    Bvh bvh;                          // kept for refit and for filtered walks
     std::vector<Triangle> triangles;  // the filtered walk's leaf data
     std::unique_ptr<Tracer> tracer;
-    bool duplicates = false;        // some triangle is in several leaves (spatial splits)
+    bool duplicates = false;  // some triangle is in several leaves (spatial splits)
 };
 
 struct InstanceRecord {
@@ -69,8 +69,8 @@ struct RenderScene::Impl {
     uint32_t depth = 0;
     // The distinct scenes instanced, with their generation when this scene's boxes were taken.
     std::vector<std::pair<const RenderScene*, uint64_t>> children;
-    uint64_t generation = 1;                     // bumped by every commit and refit
-    mutable std::atomic<int> instanced_by{0};    // instances of this scene held by other scenes
+    uint64_t generation = 1;                   // bumped by every commit and refit
+    mutable std::atomic<int> instanced_by{0};  // instances of this scene held by other scenes
 
     std::string what(uint32_t id) const { return "scene '" + name + "': geometry " + std::to_string(id); }
     scene::Geometry& geometry(uint32_t id);

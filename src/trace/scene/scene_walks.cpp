@@ -84,7 +84,8 @@ void mesh_closest(const MeshRecord& mesh, uint32_t id, const Ray& ray, QueryStat
         return;
     }
     const Hit hit = mesh.tracer->intersect(ray);
-    if (hit.is_hit() && (!best.is_hit() || hit.t < best.t)) best = make_hit(state, id, hit.t, hit.u, hit.v, hit.primitive);
+    if (hit.is_hit() && (!best.is_hit() || hit.t < best.t))
+        best = make_hit(state, id, hit.t, hit.u, hit.v, hit.primitive);
 }
 
 bool mesh_occluded(const MeshRecord& mesh, uint32_t id, const Ray& ray, QueryState& state) {

@@ -52,7 +52,8 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
         BvhNode& node = top.bvh.nodes[n];
         AABB box;
         if (node.is_leaf()) {
-            for (uint32_t k = 0; k < node.reference_count; ++k) box.extend(items[top.bvh.primitives[node.first + k]].box);
+            for (uint32_t k = 0; k < node.reference_count; ++k)
+                box.extend(items[top.bvh.primitives[node.first + k]].box);
         } else {
             box = merge(top.bvh.nodes[node.first].bounds, top.bvh.nodes[node.first + 1].bounds);
         }
@@ -66,7 +67,8 @@ void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles) {
         BvhNode& node = bvh.nodes[n];
         AABB box;
         if (node.is_leaf()) {
-            for (uint32_t k = 0; k < node.reference_count; ++k) box.extend(triangles[bvh.primitives[node.first + k]].bounds());
+            for (uint32_t k = 0; k < node.reference_count; ++k)
+                box.extend(triangles[bvh.primitives[node.first + k]].bounds());
         } else {
             box = merge(bvh.nodes[node.first].bounds, bvh.nodes[node.first + 1].bounds);
         }
