@@ -113,7 +113,12 @@ TEST(SceneErrors, UnknownDetachedAndSharedIds) {
     expect_error([&] { child->refit(b); }, "(detached)");
     child->commit();
     EXPECT_EQ(child->geometry_count(), 1u);
-    expect_error([&] { RenderScene empty(SceneConfig{}, "empty"); empty.commit(); }, "nothing to commit");
+    expect_error(
+        [&] {
+            RenderScene empty(SceneConfig{}, "empty");
+            empty.commit();
+        },
+        "nothing to commit");
 }
 
 TEST(SceneErrors, RefitOfAnInstancedSceneMakesItsParentsRefit) {
