@@ -26,8 +26,18 @@ std::vector<Triangle> organic(size_t count) {
 Affine turned(float degrees, float sx, Vec3 shift, bool mirror) {
     const double c = std::cos(degrees * M_PI / 180.0), s = std::sin(degrees * M_PI / 180.0);
     Affine a;
-    a.m = {float(sx * c * (mirror ? -1 : 1)), float(-s), 0, shift.x, float(sx * s * (mirror ? -1 : 1)), float(c), 0,
-           shift.y, 0, 0, 1.3f, shift.z};
+    a.m = {float(sx * c * (mirror ? -1 : 1)),
+           float(-s),
+           0,
+           shift.x,
+           float(sx * s * (mirror ? -1 : 1)),
+           float(c),
+           0,
+           shift.y,
+           0,
+           0,
+           1.3f,
+           shift.z};
     return a;
 }
 
@@ -129,7 +139,8 @@ TEST(SceneFilter, SplitTrianglesReachTheFilterOnce) {
         if (!split[i]) continue;
         const Vec3 target = (mesh[i].v0 + mesh[i].v1 + mesh[i].v2) / 3.0f;
         const Ray& r = random[aimed++];
-        for (const Ray& ray : {Ray{r.org, target - r.org, 0.0f, kInfinity}, Ray{target - r.dir, r.dir, 0.0f, kInfinity}}) {
+        for (const Ray& ray :
+             {Ray{r.org, target - r.org, 0.0f, kInfinity}, Ray{target - r.dir, r.dir, 0.0f, kInfinity}}) {
             offers.clear();
             EXPECT_FALSE(scene.intersect(ray, context).is_hit());
             for (const auto& [primitive, n] : offers) {

@@ -21,6 +21,7 @@ __all__: list[str] = [
     "Error",
     "Quality",
     "RayQueries",
+    "RenderScene",
     "Scene",
     "Tracer",
     "Tracer64",
@@ -441,6 +442,71 @@ class Tracer64:
         """
         The number of triangles traced.
         """
+
+class RenderScene:
+    """
+    A scene of meshes and instances of other scenes (docs/scenes.md); spacebvh.Scene is one triangle mesh, a RenderScene many, placed.
+    """
+    def __init__(
+        self,
+        builder: str = "binned",
+        kernel: str = "auto",
+        name: str = "scene",
+        threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> None:
+        """
+        Each mesh's tree is built by `builder`; `kernel` is a single-ray kernel name (kernels()).
+        """
+    def attach_instance(self, scene: RenderScene, transform: typing.Any, mask: typing.Any = 4294967295) -> int:
+        """
+        Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.
+        """
+    def attach_mesh(self, mesh: Scene, mask: typing.Any = 4294967295) -> int:
+        """
+        Adds a spacebvh.Scene (float32 coordinates) as a mesh; returns its geometry id.
+        """
+    def commit(self) -> None:
+        """
+        Builds the top level over the geometries.
+        """
+    def detach(self, id: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    def intersect(
+        self,
+        origins: typing.Any,
+        directions: typing.Any,
+        tmin: typing.Any = 0.0,
+        tmax: typing.Any = ...,
+        mask: typing.Any = 4294967295,
+    ) -> tuple:
+        """
+        Closest hits: (t, primitive, u, v, geometry, instance) with instance (n, 4) ids from this scene down; -1 (and t = inf) where nothing is hit.
+        """
+    def occluded(
+        self,
+        origins: typing.Any,
+        directions: typing.Any,
+        tmin: typing.Any = 0.0,
+        tmax: typing.Any = ...,
+        mask: typing.Any = 4294967295,
+    ) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        Whether anything lies in [tmin, tmax].
+        """
+    def refit(self, id: typing.SupportsInt | typing.SupportsIndex | None = None, mesh: Scene | None = None) -> None:
+        """
+        refit(id, mesh): mesh `id` takes the moved triangles of `mesh` (same count) and its tree is refitted; refit(): the top level follows the instanced scenes' refits.
+        """
+    def set_mask(self, id: typing.SupportsInt | typing.SupportsIndex, mask: typing.Any) -> None: ...
+    @property
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
+    @property
+    def committed(self) -> bool: ...
+    @property
+    def depth(self) -> int: ...
+    @property
+    def geometry_count(self) -> int: ...
+    @property
+    def name(self) -> str: ...
 
 def build(
     scene: Scene,

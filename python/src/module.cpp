@@ -45,4 +45,5 @@ PYBIND11_MODULE(_core, m) {
     bind_embree(m);
     bind_queries(m);
     bind_float64(m);
+    bind_render_scene(m);
 }
