@@ -26,8 +26,7 @@ struct PyRenderScene {
     int threads = 0;
 };
 
-PyRenderScene make_scene(const std::string& builder, const std::string& kernel, const std::string& name,
-                         int threads) {
+PyRenderScene make_scene(const std::string& builder, const std::string& kernel, const std::string& name, int threads) {
     check_threads(threads);
     SceneConfig config;
     config.recipe = TreeRecipe::for_builder(builder);
@@ -96,7 +95,8 @@ std::vector<uint32_t> masks_of(const py::handle& arg, size_t rays, uint32_t& sha
 py::array_t<int64_t> ids_array(const std::vector<SceneHit>& hits, size_t column) {
     const py::ssize_t n = py::ssize_t(hits.size());
     const bool path = column != size_t(-1);
-    py::array_t<int64_t> out = path ? py::array_t<int64_t>({n, py::ssize_t(kMaxInstanceLevels)}) : py::array_t<int64_t>(n);
+    py::array_t<int64_t> out =
+        path ? py::array_t<int64_t>({n, py::ssize_t(kMaxInstanceLevels)}) : py::array_t<int64_t>(n);
     int64_t* data = out.mutable_data();
     const auto id = [](uint32_t v) { return v == kInvalidIndex ? int64_t(-1) : int64_t(v); };
     for (size_t i = 0; i < hits.size(); ++i) {
@@ -191,15 +191,18 @@ void bind_render_scene(py::module_& m) {
         .def(
             "attach_instance",
             [](PyRenderScene& self, const PyRenderScene& child, const py::handle& transform, const py::handle& mask) {
-                const uint32_t id = self.scene->attach_instance(child.scene, transform_of(transform), mask_of(mask, "mask"));
+                const uint32_t id =
+                    self.scene->attach_instance(child.scene, transform_of(transform), mask_of(mask, "mask"));
                 self.by_id.resize(id + 1, nullptr);
                 return id;
             },
             py::arg("scene"), py::arg("transform"), py::arg("mask") = 0xFFFFFFFFu,
             "Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.")
-        .def("detach", [](PyRenderScene& self, uint32_t id) { self.scene->detach(id); }, py::arg("id"))
         .def(
-            "set_mask", [](PyRenderScene& self, uint32_t id, const py::handle& mask) {
+            "detach", [](PyRenderScene& self, uint32_t id) { self.scene->detach(id); }, py::arg("id"))
+        .def(
+            "set_mask",
+            [](PyRenderScene& self, uint32_t id, const py::handle& mask) {
                 self.scene->set_mask(id, mask_of(mask, "mask"));
             },
             py::arg("id"), py::arg("mask"))
