@@ -61,17 +61,21 @@ std::vector<Affine> placements(size_t count, float spacing) {
     std::vector<Affine> out;
     const size_t side = size_t(std::ceil(std::cbrt(double(count))));
     for (size_t k = 0; k < count; ++k) {
-        const Vec3 axis = normalize(Vec3(float(random.next() - 0.5), float(random.next() - 0.5), float(random.next() + 0.1)));
+        const Vec3 axis =
+            normalize(Vec3(float(random.next() - 0.5), float(random.next() - 0.5), float(random.next() + 0.1)));
         const double angle = random.next() * 2.0 * M_PI, c = std::cos(angle), s = std::sin(angle);
-        const double r[3][3] = {
-            {c + axis.x * axis.x * (1 - c), axis.x * axis.y * (1 - c) - axis.z * s, axis.x * axis.z * (1 - c) + axis.y * s},
-            {axis.y * axis.x * (1 - c) + axis.z * s, c + axis.y * axis.y * (1 - c), axis.y * axis.z * (1 - c) - axis.x * s},
-            {axis.z * axis.x * (1 - c) - axis.y * s, axis.z * axis.y * (1 - c) + axis.x * s, c + axis.z * axis.z * (1 - c)}};
+        const double r[3][3] = {{c + axis.x * axis.x * (1 - c), axis.x * axis.y * (1 - c) - axis.z * s,
+                                 axis.x * axis.z * (1 - c) + axis.y * s},
+                                {axis.y * axis.x * (1 - c) + axis.z * s, c + axis.y * axis.y * (1 - c),
+                                 axis.y * axis.z * (1 - c) - axis.x * s},
+                                {axis.z * axis.x * (1 - c) - axis.y * s, axis.z * axis.y * (1 - c) + axis.x * s,
+                                 c + axis.z * axis.z * (1 - c)}};
         const double scale[3] = {0.5 + 1.5 * random.next(), 0.5 + 1.5 * random.next(), 0.5 + 1.5 * random.next()};
         const size_t cell[3] = {k % side, (k / side) % side, k / (side * side)};
         Affine a;
         for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) a.m[4 * i + j] = float(scale[i] * r[i][j] * (k % 3 == 0 && j == 0 ? -1.0 : 1.0));
+            for (int j = 0; j < 3; ++j)
+                a.m[4 * i + j] = float(scale[i] * r[i][j] * (k % 3 == 0 && j == 0 ? -1.0 : 1.0));
             a.m[4 * i + 3] = float(cell[i]) * spacing;
         }
         out.push_back(a);
@@ -100,23 +104,34 @@ struct EmbreeTwoLevel {
     }
     ~EmbreeTwoLevel() { rtcReleaseScene(top); }
     void trace(std::span<const Ray> rays, std::span<float> t, bool occlusion) const {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
-            RTCIntersectContext context;
-            rtcInitIntersectContext(&context);
-            for (size_t i = range.begin(); i != range.end(); ++i) {
-                RTCRayHit rh{};
-                rh.ray = {rays[i].org.x, rays[i].org.y, rays[i].org.z, rays[i].tmin, rays[i].dir.x, rays[i].dir.y,
-                          rays[i].dir.z, 0.0f, rays[i].tmax, 0xFFFFFFFFu, 0, 0};
-                rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                if (occlusion) {
-                    rtcOccluded1(top, &context, &rh.ray);
-                    t[i] = rh.ray.tfar < 0.0f ? 0.0f : kInfinity;
-                } else {
-                    rtcIntersect1(top, &context, &rh);
-                    t[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kInfinity : rh.ray.tfar;
-                }
-            }
-        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              RTCIntersectContext context;
+                              rtcInitIntersectContext(&context);
+                              for (size_t i = range.begin(); i != range.end(); ++i) {
+                                  RTCRayHit rh{};
+                                  rh.ray = {rays[i].org.x,
+                                            rays[i].org.y,
+                                            rays[i].org.z,
+                                            rays[i].tmin,
+                                            rays[i].dir.x,
+                                            rays[i].dir.y,
+                                            rays[i].dir.z,
+                                            0.0f,
+                                            rays[i].tmax,
+                                            0xFFFFFFFFu,
+                                            0,
+                                            0};
+                                  rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                                  if (occlusion) {
+                                      rtcOccluded1(top, &context, &rh.ray);
+                                      t[i] = rh.ray.tfar < 0.0f ? 0.0f : kInfinity;
+                                  } else {
+                                      rtcIntersect1(top, &context, &rh);
+                                      t[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kInfinity : rh.ray.tfar;
+                                  }
+                              }
+                          });
     }
 };
 
@@ -135,8 +150,8 @@ void trace_ours(const RenderScene& scene, std::span<const Ray> rays, std::span<f
 size_t disagreements(std::span<const Ray> rays, std::span<const float> a, std::span<const float> b, float diagonal) {
     size_t n = 0;
     for (size_t i = 0; i < rays.size(); ++i)
-        n += !tools::hits_agree({a[i], a[i] == kInfinity ? kInvalidIndex : 0}, {b[i], b[i] == kInfinity ? kInvalidIndex : 0},
-                                rays[i], diagonal);
+        n += !tools::hits_agree({a[i], a[i] == kInfinity ? kInvalidIndex : 0},
+                                {b[i], b[i] == kInfinity ? kInvalidIndex : 0}, rays[i], diagonal);
     return n;
 }
 
@@ -152,13 +167,16 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
     tools::Scene flat;
     flat.name = "flattened";
     for (const Affine& a : placed)
-        for (const Triangle& t : mesh.triangles) flat.triangles.push_back({a.apply(t.v0), a.apply(t.v1), a.apply(t.v2)});
+        for (const Triangle& t : mesh.triangles)
+            flat.triangles.push_back({a.apply(t.v0), a.apply(t.v1), a.apply(t.v2)});
     const auto start = std::chrono::steady_clock::now();
     const Bvh bvh = build(flat.mesh(), TreeRecipe::for_builder("spatial"));
     const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     const Tracer tracer(flat.mesh(), bvh, Kernel::bvh8);
-    std::printf("flattened: %zu triangles, spatial build %.0f ms\n| rays | query | flattened bvh8 ms | two-level bvh8 ms | flattened/two-level |\n",
-                triangles, build_ms);
+    std::printf(
+        "flattened: %zu triangles, spatial build %.0f ms\n| rays | query | flattened bvh8 ms | two-level bvh8 ms | "
+        "flattened/two-level |\n",
+        triangles, build_ms);
     size_t k = 0;
     for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
         for (bool occlusion : {false, true}) {
@@ -198,7 +216,8 @@ int main(int argc, char** argv) try {
     const uint32_t mesh_id = leaf->attach_mesh(mesh.mesh());
     leaf->commit();
     std::unique_ptr<EmbreeTwoLevel> embree;
-    const double embree_top_ms = median_ms(runs, [&] { embree = std::make_unique<EmbreeTwoLevel>(embree_mesh, placed); });
+    const double embree_top_ms =
+        median_ms(runs, [&] { embree = std::make_unique<EmbreeTwoLevel>(embree_mesh, placed); });
     std::unique_ptr<RenderScene> ours;
     const double ours_top_ms = median_ms(runs, [&] {
         ours.reset();
@@ -206,8 +225,8 @@ int main(int argc, char** argv) try {
         for (const Affine& a : placed) ours->attach_instance(leaf, a);
         ours->commit();
     });
-    std::printf("top level (attach + commit): ours %.2f ms, Embree %.2f ms (commit only), ours/Embree %.2f\n", ours_top_ms,
-                embree_top_ms, ours_top_ms / embree_top_ms);
+    std::printf("top level (attach + commit): ours %.2f ms, Embree %.2f ms (commit only), ours/Embree %.2f\n",
+                ours_top_ms, embree_top_ms, ours_top_ms / embree_top_ms);
 
     const AABB world = ours->bounds();
     const float diagonal = length(world.extent());

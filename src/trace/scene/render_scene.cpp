@@ -87,6 +87,7 @@ uint32_t RenderScene::attach_mesh(const MeshView& mesh, const TreeRecipe& recipe
     if (record.triangles.empty()) throw Error(record.view.name() + ": no triangles");
     record.bvh = build(record.view, recipe);
     record.duplicates = record.bvh.primitives.size() > record.triangles.size();
+    record.extent = scene::extent_of(record.bvh.root().bounds);
     record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, impl_->config.tracer);
     impl_->geometries.push_back({mask, std::move(record)});
     impl_->committed = false;
@@ -151,7 +152,7 @@ void RenderScene::commit() {
     s.item_ids = std::move(ids);
     s.items = std::move(items);
     s.bounds = s.top.bvh.root().bounds;
-    s.root_padding = s.top.padding.front();
+    s.root_padding = s.top.padding;
     s.depth = depth;
     s.list_children();
     ++s.generation;
@@ -170,6 +171,7 @@ void RenderScene::refit(uint32_t id) {
     Bvh bvh = mesh->bvh;
     scene::refit_boxes(bvh, moved);
     auto tracer = std::make_unique<Tracer>(MeshView(moved), bvh, impl_->config.tracer);
+    mesh->extent = scene::extent_of(bvh.root().bounds);
     mesh->bvh = std::move(bvh);
     mesh->triangles = std::move(moved);
     mesh->tracer = std::move(tracer);
@@ -190,7 +192,7 @@ void RenderScene::refit() {
     }
     scene::refit_top_level(s.top, s.items);
     s.bounds = s.top.bvh.root().bounds;
-    s.root_padding = s.top.padding.front();
+    s.root_padding = s.top.padding;
     s.list_children();
     ++s.generation;
 }
@@ -207,8 +209,8 @@ size_t RenderScene::geometry_count() const {
 }
 
 size_t RenderScene::memory_bytes() const {
-    size_t bytes = impl_->top.bvh.nodes.size() * (sizeof(BvhNode) + sizeof(scene::Padding)) +
-                   impl_->top.bvh.primitives.size() * sizeof(uint32_t) + impl_->geometries.size() * sizeof(Geometry);
+    size_t bytes = impl_->top.bvh.nodes.size() * sizeof(BvhNode) + impl_->top.bvh.primitives.size() * sizeof(uint32_t) +
+                   impl_->geometries.size() * sizeof(Geometry);
     for (const Geometry& g : impl_->geometries)
         if (const MeshRecord* mesh = g.mesh())
             bytes += mesh->tracer->memory_bytes() + mesh->triangles.size() * sizeof(Triangle) +

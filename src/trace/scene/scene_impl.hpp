@@ -25,6 +25,7 @@ struct MeshRecord {
     std::vector<Triangle> triangles;  // the filtered walk's leaf data
     std::unique_ptr<Tracer> tracer;
     bool duplicates = false;  // some triangle is in several leaves (spatial splits)
+    double extent = 0.0;      // scene::extent_of(the tree's root box)
 };
 
 struct InstanceRecord {

@@ -53,7 +53,7 @@ SceneHit make_hit(const QueryState& state, uint32_t geometry, float t, float u, 
 // occlusion (`any`): the first accepted one ends the walk. Returns whether one was accepted.
 bool filtered_mesh_walk(const MeshRecord& mesh, uint32_t id, const Ray& ray, QueryState& state, bool any,
                         SceneHit& best) {
-    const scene::PaddedQuery query{mesh.bvh, nullptr, scene::BoxRay(ray)};
+    const scene::PaddedQuery query{mesh.bvh, scene::BoxRay(ray, {}, mesh.extent)};
     const trace::WatertightRay sheared(ray);
     float bound = ray.tmax;
     bool accepted_any = false;
@@ -100,35 +100,22 @@ bool mesh_occluded(const MeshRecord& mesh, uint32_t id, const Ray& ray, QuerySta
 
 namespace {
 
-// Calls on_mesh(mesh, id) or on_instance(instance, id) for each item of a top-level leaf that the mask
-// sees, in leaf order; an instance that shares its leaf is first tested against its own padded box.
-// Stops when a call returns true, and returns whether one did.
+// Calls on_mesh(mesh, id) or on_instance(instance, id) for the item of a top-level leaf (one per
+// leaf; its box was tested on the way down) when the mask sees it. Returns what the call returns.
 template <class OnMesh, class OnInstance>
-bool visit_items(const RenderScene::Impl& s, const BvhNode& leaf, const scene::PaddedQuery& query, float bound,
-                 uint32_t mask, OnMesh&& on_mesh, OnInstance&& on_instance) {
-    for (uint32_t k = 0; k < leaf.reference_count; ++k) {
-        const uint32_t item = s.top.bvh.primitives[leaf.first + k];
-        const uint32_t id = s.item_ids[item];
-        const Geometry& g = s.geometries[id];
-        if (!(g.mask & mask)) continue;
-        if (const MeshRecord* mesh = g.mesh()) {
-            if (on_mesh(*mesh, id)) return true;
-            continue;
-        }
-        float entry;
-        const scene::Padding& p = s.items[item].padding;
-        if (leaf.reference_count > 1 &&
-            !scene::meets(query.ray, s.items[item].box, p.pad0 + p.pad1 * query.ray.org_norm, bound, entry))
-            continue;
-        if (on_instance(*g.instance(), id)) return true;
-    }
-    return false;
+bool visit_item(const RenderScene::Impl& s, const BvhNode& leaf, uint32_t mask, OnMesh&& on_mesh,
+                OnInstance&& on_instance) {
+    const uint32_t id = s.item_ids[s.top.bvh.primitives[leaf.first]];
+    const Geometry& g = s.geometries[id];
+    if (!(g.mask & mask)) return false;
+    if (const MeshRecord* mesh = g.mesh()) return on_mesh(*mesh, id);
+    return on_instance(*g.instance(), id);
 }
 
 }  // namespace
 
 void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t level, SceneHit& best) const {
-    const scene::PaddedQuery query{top.bvh, top.padding.data(), scene::BoxRay(ray)};
+    const scene::PaddedQuery query{top.bvh, scene::BoxRay(ray, top.padding, top.extent)};
     float bound = ray.tmax;
     const auto bounded = [&] {
         Ray r = ray;
@@ -140,8 +127,8 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
         return false;
     };
     trace::walk(query, bound, [&](const scene::PaddedQuery::Entry& entry) {
-        return visit_items(
-            *this, top.bvh.nodes[entry.node], query, bound, state.mask,
+        return visit_item(
+            *this, top.bvh.nodes[entry.node], state.mask,
             [&](const MeshRecord& mesh, uint32_t id) {
                 mesh_closest(mesh, id, bounded(), state, best);
                 return lower();
@@ -156,12 +143,12 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
 }
 
 bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t level) const {
-    const scene::PaddedQuery query{top.bvh, top.padding.data(), scene::BoxRay(ray)};
+    const scene::PaddedQuery query{top.bvh, scene::BoxRay(ray, top.padding, top.extent)};
     float bound = ray.tmax;
     bool blocked = false;
     trace::walk(query, bound, [&](const scene::PaddedQuery::Entry& entry) {
-        blocked = visit_items(
-            *this, top.bvh.nodes[entry.node], query, bound, state.mask,
+        blocked = visit_item(
+            *this, top.bvh.nodes[entry.node], state.mask,
             [&](const MeshRecord& mesh, uint32_t id) { return mesh_occluded(mesh, id, ray, state); },
             [&](const InstanceRecord& inst, uint32_t id) {
                 state.path[level] = id;

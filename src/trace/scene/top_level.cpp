@@ -8,23 +8,13 @@ namespace spacebvh::scene {
 
 namespace {
 
-// Each node's padding: the largest of the items below it (children follow their parent).
-void pad_nodes(TopLevel& top, std::span<const TopLevelItem> items) {
-    top.padding.assign(top.bvh.nodes.size(), Padding{});
-    for (size_t n = top.bvh.nodes.size(); n-- > 0;) {
-        const BvhNode& node = top.bvh.nodes[n];
-        Padding& p = top.padding[n];
-        const auto take = [&](const Padding& q) {
-            p.pad0 = std::max(p.pad0, q.pad0);
-            p.pad1 = std::max(p.pad1, q.pad1);
-        };
-        if (node.is_leaf()) {
-            for (uint32_t k = 0; k < node.reference_count; ++k) take(items[top.bvh.primitives[node.first + k]].padding);
-        } else {
-            take(top.padding[node.first]);
-            take(top.padding[node.first + 1]);
-        }
+void measure(TopLevel& top, std::span<const TopLevelItem> items) {
+    top.padding = {};
+    for (const TopLevelItem& item : items) {
+        top.padding.pad0 = std::max(top.padding.pad0, item.padding.pad0);
+        top.padding.pad1 = std::max(top.padding.pad1, item.padding.pad1);
     }
+    top.extent = extent_of(top.bvh.root().bounds);
 }
 
 }  // namespace
@@ -38,12 +28,11 @@ TopLevel build_top_level(std::span<const TopLevelItem> items) {
         boxes[i] = {b.lo, b.hi, Vec3{b.lo.x, b.hi.y, b.lo.z}};
     }
     BuildConfig config = BuildConfig::for_preset(Preset::binned);
-    // Visiting an item costs a whole walk of its own tree: few items per leaf.
-    config.cost.intersection_cost = 4.0f;
-    config.limits.max_leaf_size = 4;
+    // One item per leaf: its box is then tested once, on the way down, and a leaf is one walk.
+    config.limits.max_leaf_size = 1;
     TopLevel top;
     top.bvh = build(MeshView(boxes).named("top level"), config);
-    pad_nodes(top, items);
+    measure(top, items);
     return top;
 }
 
@@ -59,7 +48,7 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
         }
         node.bounds = box;
     }
-    pad_nodes(top, items);
+    measure(top, items);
 }
 
 void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles) {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
-// A scene's top level: a binary tree over its geometries' boxes, each with the padding of its box
-// (instance_transform.hpp), and the walk query that tests those boxes conservatively in double. The
+// A scene's top level: a binary tree over its geometries' boxes with the largest padding of those
+// boxes (instance_transform.hpp), and the walk query that tests the boxes conservatively in float. The
 // same query walks a mesh's own binary tree (no padding) for filtered queries.
 #pragma once
 
@@ -22,8 +22,9 @@ struct TopLevelItem {
 };
 
 struct TopLevel {
-    Bvh bvh;                       // primitives are item indices
-    std::vector<Padding> padding;  // per node: the largest of its items'
+    Bvh bvh;              // primitives are item indices; one item per leaf
+    Padding padding;      // the largest of the items'
+    double extent = 0.0;  // extent_of(the root's box)
 };
 
 // The binned SAH tree over the items' boxes (built by build() over one flat triangle per box, whose
@@ -34,43 +35,53 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items);
 // order, so children follow their parent).
 void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles);
 
-// The ray as the box tests need it, in double.
+// The ray as the box tests of one walk need it. Every box is grown by one allowance `grow`: the
+// tree's largest padding for this ray's origin, plus 2^-20 of the largest coordinate of the tree's
+// boxes and of the origin. The float slab test below errs by at most about 4 ulps of those
+// magnitudes (the rounding of org +- grow, of the difference and of the product), far below that
+// 2^-20, so it never culls a box the ray truly meets within the padding.
 struct BoxRay {
-    double org[3], dir[3], inv[3];
-    double tmin, org_norm;
-    explicit BoxRay(const Ray& ray) : tmin(ray.tmin) {
-        org_norm = 0.0;
+    float lo_org[3], hi_org[3];  // org + grow (tested against lower planes), org - grow (upper)
+    float inv[3];
+    bool parallel[3];  // the direction's component is 0, or its inverse is not finite
+    float tmin;
+    double org_norm;
+
+    BoxRay(const Ray& ray, Padding padding, double extent) : tmin(ray.tmin) {
+        org_norm = std::max({std::fabs(double(ray.org.x)), std::fabs(double(ray.org.y)), std::fabs(double(ray.org.z))});
+        const double grow = padding.pad0 + padding.pad1 * org_norm + 0x1p-20 * (extent + org_norm);
         for (int i = 0; i < 3; ++i) {
-            org[i] = ray.org[i];
-            dir[i] = ray.dir[i];
-            inv[i] = 1.0 / dir[i];
-            org_norm = std::max(org_norm, std::fabs(org[i]));
+            inv[i] = 1.0f / ray.dir[i];
+            parallel[i] = !std::isfinite(inv[i]);
+            lo_org[i] = float(double(ray.org[i]) + grow);
+            hi_org[i] = float(double(ray.org[i]) - grow);
+            // A direction too small to invert still moves along the axis: no test on that axis.
+            if (parallel[i] && ray.dir[i] != 0.0f) lo_org[i] = kInfinity, hi_org[i] = -kInfinity;
         }
     }
 };
 
-// Whether the ray meets `box` grown by `pad` within [tmin, tmax], and where it enters. The box is also
-// grown by 2^-30 of its largest coordinate and the origin's: far above the double rounding of the
-// slab distances (about 2^-52 of the same), so no box the ray truly meets is culled.
-inline bool meets(const BoxRay& r, const AABB& box, double pad, double tmax, float& entry) {
-    const double m = std::max({std::fabs(double(box.lo.x)), std::fabs(double(box.lo.y)), std::fabs(double(box.lo.z)),
-                               std::fabs(double(box.hi.x)), std::fabs(double(box.hi.y)), std::fabs(double(box.hi.z))});
-    const double grow = pad + 0x1p-30 * (m + r.org_norm);
-    double near = r.tmin, far = tmax;
+// Whether the ray meets `box` (grown as BoxRay says) within [tmin, tmax], and where it enters.
+[[gnu::always_inline]] inline bool meets(const BoxRay& r, const AABB& box, float tmax, float& entry) {
+    float near = r.tmin, far = tmax;
     for (int i = 0; i < 3; ++i) {
-        const double lo = double(box.lo[i]) - grow, hi = double(box.hi[i]) + grow;
-        if (r.dir[i] == 0.0) {
-            if (r.org[i] < lo || r.org[i] > hi) return false;
+        if (r.parallel[i]) {
+            if (box.lo[i] > r.lo_org[i] || box.hi[i] < r.hi_org[i]) return false;
             continue;
         }
-        double t0 = (lo - r.org[i]) * r.inv[i], t1 = (hi - r.org[i]) * r.inv[i];
-        if (t0 > t1) std::swap(t0, t1);
-        near = std::max(near, t0);
-        far = std::min(far, t1);
+        const float t0 = (box.lo[i] - r.lo_org[i]) * r.inv[i], t1 = (box.hi[i] - r.hi_org[i]) * r.inv[i];
+        near = std::max(near, std::min(t0, t1));
+        far = std::min(far, std::max(t0, t1));
     }
-    if (!(near <= far)) return false;
-    entry = float(near);
-    return true;
+    entry = near;
+    return near <= far;
+}
+
+// The largest coordinate of a box, for BoxRay.
+inline double extent_of(const AABB& box) {
+    double m = 0.0;
+    for (int i = 0; i < 3; ++i) m = std::max({m, std::fabs(double(box.lo[i])), std::fabs(double(box.hi[i]))});
+    return m;
 }
 
 // The walk query (trace/traversal/walk.hpp) over a binary tree with padded boxes, nearest first.
@@ -83,21 +94,17 @@ struct PaddedQuery {
     static constexpr int kStackCapacity = 2 * 1024 + 4;  // depth limit 1024 (LimitConfig), one push per level
 
     const Bvh& bvh;
-    const Padding* padding;  // per node, or null for none
     BoxRay ray;
 
     Entry root() const { return {0, float(ray.tmin)}; }
     bool is_leaf(const Entry& e) const { return bvh.nodes[e.node].is_leaf(); }
     bool beyond(const Entry& e, Bound bound) const { return e.key > bound; }
-    double pad_of(uint32_t node) const {
-        return padding ? padding[node].pad0 + padding[node].pad1 * ray.org_norm : 0.0;
-    }
     int enter(Entry& node, Bound bound, Entry* out) const {
         const uint32_t first = bvh.nodes[node.node].first;
         float key[2];
         unsigned entered = 0;
         for (unsigned c = 0; c < 2; ++c)
-            if (meets(ray, bvh.nodes[first + c].bounds, pad_of(first + c), bound, key[c])) entered |= 1u << c;
+            if (meets(ray, bvh.nodes[first + c].bounds, bound, key[c])) entered |= 1u << c;
         if (!entered) return 0;
         return trace::nearest_first(entered, key, node, out, [&](int slot) { return Entry{first + slot, key[slot]}; });
     }
