@@ -173,9 +173,10 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
     const Bvh bvh = build(flat.mesh(), TreeRecipe::for_builder("spatial"));
     const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     const Tracer tracer(flat.mesh(), bvh, Kernel::bvh8);
+    const tools::EmbreeScene embree_flat(flat, tools::EmbreeQuality::high);
     std::printf(
-        "flattened: %zu triangles, spatial build %.0f ms\n| rays | query | flattened bvh8 ms | two-level bvh8 ms | "
-        "flattened/two-level |\n",
+        "flattened: %zu triangles, spatial build %.0f ms\n| rays | query | flattened bvh8 ms | two-level bvh8 ms "
+        "| flattened/two-level | Embree flattened ms | Embree flattened/ours flattened |\n",
         triangles, build_ms);
     size_t k = 0;
     for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
@@ -188,8 +189,14 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
                 else
                     tracer.intersect(*rays, hits);
             });
-            std::printf("| %s | %s | %.1f | %.1f | %.2f |\n", kind, occlusion ? "occluded" : "closest", ms,
-                        two_level_ms[k], ms / two_level_ms[k]);
+            const double embree_ms = median_ms(runs, [&] {
+                if (occlusion)
+                    embree_flat.occluded(*rays, blocked);
+                else
+                    embree_flat.intersect(*rays, hits);
+            });
+            std::printf("| %s | %s | %.1f | %.1f | %.2f | %.1f | %.2f |\n", kind, occlusion ? "occluded" : "closest",
+                        ms, two_level_ms[k], ms / two_level_ms[k], embree_ms, embree_ms / ms);
             ++k;
         }
 }
