@@ -185,6 +185,38 @@ TEST(RenderScene, SameAnswersForAnyThreadCount) {
     }
 }
 
+// Rays aimed exactly at world-space vertices and edge midpoints of the placements, where triangles of
+// one mesh meet: each answer is the per-instance arbiter's (the flattened scene may differ here by a
+// rounding, docs/scenes.md, so it is not the reference).
+TEST(RenderScene, RaysAtVerticesAndEdgesMatchTheArbiterPerInstance) {
+    for (Kernel kernel : {Kernel::binary, Kernel::bvh8}) {
+        SceneConfig config;
+        config.tracer.kernel = kernel;
+        const TwoLevels s = two_levels(config);
+        const std::vector<Placement> all = placements(*s.top);
+        const std::vector<Ray> random = tools::generate_random_rays(s.top->scene->bounds(), 300, 13);
+        std::vector<Ray> rays;
+        for (size_t k = 0; k < random.size(); ++k) {
+            const Placement& p = all[k % all.size()];
+            const Triangle w = p.world((*p.triangles)[(k * 7919) % p.triangles->size()]);
+            const Vec3 target = k % 2 ? w.v0 : (w.v1 + w.v2) * 0.5f;
+            rays.push_back({random[k].org, target - random[k].org, 0.0f, kInfinity});
+        }
+        const float diagonal = length(s.top->scene->bounds().extent());
+        size_t wrong = 0, hits = 0;
+        for (const Ray& ray : rays) {
+            const SceneHit hit = s.top->scene->intersect(ray);
+            const Reference truth = closest_in_instances(all, ray, 0xFFFFFFFFu);
+            hits += hit.is_hit();
+            wrong += !tools::hits_agree(record_of(hit), record_of(truth), ray, diagonal);
+            wrong += s.top->scene->occluded(ray) != truth.is_hit();
+            wrong += hit.is_hit() && !not_a_crossing(all, hit, ray, diagonal).empty();
+        }
+        EXPECT_EQ(wrong, 0u) << to_string(kernel);
+        EXPECT_GT(hits, rays.size() / 2) << to_string(kernel);
+    }
+}
+
 // A shared mesh (the bunny) instanced by rotations, a mirror and a non-uniform scale, when present.
 TEST(RenderScene, SharedMeshInstancedMatchesTheArbiter) {
     const std::filesystem::path dir = std::filesystem::path(SPACEBVH_SHARED_DIR) / "scenes" / "bunny";
