@@ -217,6 +217,42 @@ TEST(RenderScene, RaysAtVerticesAndEdgesMatchTheArbiterPerInstance) {
     }
 }
 
+// Many instances in the same place (equal boxes, which no split separates) and a one-instance scene:
+// the closest hit is that of the mesh itself, named by one of the instances.
+TEST(RenderScene, CoincidentInstancesAndASingleInstance) {
+    const std::vector<Triangle> mesh = prefix_of("organic", 2000);
+    Level leaf(SceneConfig{}, "leaf");
+    leaf.mesh(mesh);
+    leaf.scene->commit();
+    Level many(SceneConfig{}, "many"), one(SceneConfig{}, "one");
+    for (int k = 0; k < 40; ++k) many.instance(leaf, Affine::identity(), k == 7 ? 0x2 : 0x1);
+    one.instance(leaf, Affine::identity());
+    many.scene->commit();
+    one.scene->commit();
+    const std::vector<Ray> rays = tools::generate_random_rays(leaf.scene->bounds(), 300, 17);
+    size_t hits = 0;
+    for (const Ray& ray : rays) {
+        const SceneHit direct = leaf.scene->intersect(ray), a = many.scene->intersect(ray),
+                       b = one.scene->intersect(ray);
+        hits += direct.is_hit();
+        EXPECT_EQ(a.t, direct.t);
+        EXPECT_EQ(b.t, direct.t);
+        EXPECT_EQ(b.primitive, direct.primitive);
+        if (a.is_hit()) {
+            EXPECT_TRUE(a.instance[0] < 40u && a.instance[1] == kInvalidIndex);
+        }
+        EXPECT_EQ(many.scene->occluded(ray), direct.is_hit());
+        TraceContext only7;
+        only7.mask = 0x2;
+        const SceneHit c = many.scene->intersect(ray, only7);
+        EXPECT_EQ(c.t, direct.t);
+        if (c.is_hit()) {
+            EXPECT_EQ(c.instance[0], 7u);
+        }
+    }
+    EXPECT_GT(hits, 50u);
+}
+
 // A shared mesh (the bunny) instanced by rotations, a mirror and a non-uniform scale, when present.
 TEST(RenderScene, SharedMeshInstancedMatchesTheArbiter) {
     const std::filesystem::path dir = std::filesystem::path(SPACEBVH_SHARED_DIR) / "scenes" / "bunny";

@@ -148,6 +148,7 @@ void RenderScene::commit() {
     }
     if (ids.empty()) throw Error("scene '" + s.name + "': nothing to commit (no geometry attached)");
     scene::TopLevel top = scene::build_top_level(items);
+    s.wide = scene::collapse_top_level(top.bvh);
     s.top = std::move(top);
     s.item_ids = std::move(ids);
     s.items = std::move(items);
@@ -191,6 +192,7 @@ void RenderScene::refit() {
         s.items[k] = s.item_of(g);
     }
     scene::refit_top_level(s.top, s.items);
+    s.wide = scene::collapse_top_level(s.top.bvh);
     s.bounds = s.top.bvh.root().bounds;
     s.root_padding = s.top.padding;
     s.list_children();

@@ -13,6 +13,7 @@
 #include "spacebvh/scene.hpp"
 #include "trace/scene/instance_transform.hpp"
 #include "trace/scene/top_level.hpp"
+#include "trace/scene/top_level_wide.hpp"
 
 namespace spacebvh {
 
@@ -63,7 +64,8 @@ struct RenderScene::Impl {
     std::vector<scene::Geometry> geometries;  // by id
     bool committed = false;
     scene::TopLevel top;
-    std::vector<uint32_t> item_ids;  // top-level item -> geometry id
+    std::vector<scene::TopNode4> wide;  // top.bvh collapsed, as the walks take it
+    std::vector<uint32_t> item_ids;     // top-level item -> geometry id
     std::vector<scene::TopLevelItem> items;
     AABB bounds;
     scene::Padding root_padding;

@@ -100,22 +100,29 @@ bool mesh_occluded(const MeshRecord& mesh, uint32_t id, const Ray& ray, QuerySta
 
 namespace {
 
-// Calls on_mesh(mesh, id) or on_instance(instance, id) for the item of a top-level leaf (one per
-// leaf; its box was tested on the way down) when the mask sees it. Returns what the call returns.
+// Calls on_mesh(mesh, id) or on_instance(instance, id) for each item of a top-level leaf that the mask
+// sees: one per leaf, whose box was tested on the way down, unless the depth limit left more, whose
+// boxes are then tested here. Stops when a call returns true, and returns whether one did.
 template <class OnMesh, class OnInstance>
-bool visit_item(const RenderScene::Impl& s, const BvhNode& leaf, uint32_t mask, OnMesh&& on_mesh,
-                OnInstance&& on_instance) {
-    const uint32_t id = s.item_ids[s.top.bvh.primitives[leaf.first]];
-    const Geometry& g = s.geometries[id];
-    if (!(g.mask & mask)) return false;
-    if (const MeshRecord* mesh = g.mesh()) return on_mesh(*mesh, id);
-    return on_instance(*g.instance(), id);
+bool visit_items(const RenderScene::Impl& s, uint32_t leaf_ref, const scene::BoxRay& ray, float bound, uint32_t mask,
+                 OnMesh&& on_mesh, OnInstance&& on_instance) {
+    const BvhNode& leaf = s.top.bvh.nodes[leaf_ref & ~scene::kItemBit];
+    for (uint32_t k = 0; k < leaf.reference_count; ++k) {
+        const uint32_t item = s.top.bvh.primitives[leaf.first + k];
+        const Geometry& g = s.geometries[s.item_ids[item]];
+        float entry;
+        if (!(g.mask & mask) || (leaf.reference_count > 1 && !scene::meets(ray, s.items[item].box, bound, entry)))
+            continue;
+        const MeshRecord* mesh = g.mesh();
+        if (mesh ? on_mesh(*mesh, s.item_ids[item]) : on_instance(*g.instance(), s.item_ids[item])) return true;
+    }
+    return false;
 }
 
 }  // namespace
 
 void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t level, SceneHit& best) const {
-    const scene::PaddedQuery query{top.bvh, scene::BoxRay(ray, top.padding, top.extent)};
+    const scene::WideTopQuery query{wide, scene::BoxRay(ray, top.padding, top.extent)};
     float bound = ray.tmax;
     const auto bounded = [&] {
         Ray r = ray;
@@ -126,9 +133,9 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
         if (best.is_hit()) bound = std::min(bound, best.t);
         return false;
     };
-    trace::walk(query, bound, [&](const scene::PaddedQuery::Entry& entry) {
-        return visit_item(
-            *this, top.bvh.nodes[entry.node], state.mask,
+    trace::walk(query, bound, [&](const scene::WideTopQuery::Entry& entry) {
+        return visit_items(
+            *this, entry.ref, query.ray, bound, state.mask,
             [&](const MeshRecord& mesh, uint32_t id) {
                 mesh_closest(mesh, id, bounded(), state, best);
                 return lower();
@@ -143,12 +150,12 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
 }
 
 bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t level) const {
-    const scene::PaddedQuery query{top.bvh, scene::BoxRay(ray, top.padding, top.extent)};
+    const scene::WideTopQuery query{wide, scene::BoxRay(ray, top.padding, top.extent)};
     float bound = ray.tmax;
     bool blocked = false;
-    trace::walk(query, bound, [&](const scene::PaddedQuery::Entry& entry) {
-        blocked = visit_item(
-            *this, top.bvh.nodes[entry.node], state.mask,
+    trace::walk(query, bound, [&](const scene::WideTopQuery::Entry& entry) {
+        blocked = visit_items(
+            *this, entry.ref, query.ray, bound, state.mask,
             [&](const MeshRecord& mesh, uint32_t id) { return mesh_occluded(mesh, id, ray, state); },
             [&](const InstanceRecord& inst, uint32_t id) {
                 state.path[level] = id;

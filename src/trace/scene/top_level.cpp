@@ -2,6 +2,8 @@
 // The top level of a scene: built by our binned builder over its geometries' boxes, refitted in place.
 #include "trace/scene/top_level.hpp"
 
+#include "trace/scene/top_level_wide.hpp"
+
 #include "spacebvh/build.hpp"
 
 namespace spacebvh::scene {
@@ -63,6 +65,46 @@ void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles) {
         }
         node.bounds = box;
     }
+}
+
+namespace {
+
+// Emits the node whose children are `slots` (binary node indices), then their subtrees.
+uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode4>& out) {
+    // Open the inner child of largest area until four children (Embree's collapse rule).
+    while (slots.size() < 4) {
+        int widest = -1;
+        for (int k = 0; k < int(slots.size()); ++k)
+            if (!bvh.nodes[slots[k]].is_leaf() &&
+                (widest < 0 || bvh.nodes[slots[k]].bounds.area() > bvh.nodes[slots[widest]].bounds.area()))
+                widest = k;
+        if (widest < 0) break;
+        const uint32_t first = bvh.nodes[slots[widest]].first;
+        slots[widest] = first;
+        slots.insert(slots.begin() + widest + 1, first + 1);
+    }
+    const uint32_t index = uint32_t(out.size());
+    out.emplace_back();
+    for (size_t k = 0; k < slots.size(); ++k) {
+        const BvhNode& child = bvh.nodes[slots[k]];
+        for (int i = 0; i < 3; ++i) {
+            out[index].lo[i][k] = child.bounds.lo[i];
+            out[index].hi[i][k] = child.bounds.hi[i];
+        }
+        out[index].valid |= 1u << k;
+        const uint32_t ref = child.is_leaf() ? kItemBit | slots[k] : emit(bvh, {child.first, child.first + 1}, out);
+        out[index].child[k] = ref;
+    }
+    return index;
+}
+
+}  // namespace
+
+std::vector<TopNode4> collapse_top_level(const Bvh& bvh) {
+    std::vector<TopNode4> nodes;
+    const BvhNode& root = bvh.root();
+    emit(bvh, root.is_leaf() ? std::vector<uint32_t>{0} : std::vector<uint32_t>{root.first, root.first + 1}, nodes);
+    return nodes;
 }
 
 }  // namespace spacebvh::scene
