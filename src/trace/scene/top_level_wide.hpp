@@ -56,8 +56,7 @@ struct WideTopQuery {
             near = _mm_max_ps(_mm_min_ps(t1, t0), near);
             far = _mm_min_ps(_mm_max_ps(t1, t0), far);
         }
-        const unsigned entered =
-            unsigned(_mm_movemask_ps(_mm_and_ps(inside, _mm_cmple_ps(near, far)))) & n.valid;
+        const unsigned entered = unsigned(_mm_movemask_ps(_mm_and_ps(inside, _mm_cmple_ps(near, far)))) & n.valid;
         if (!entered) return 0;
         alignas(16) float key[4];
         _mm_store_ps(key, near);
