@@ -469,7 +469,10 @@ class RenderScene:
         """
         Builds the top level over the geometries.
         """
-    def detach(self, id: typing.SupportsInt | typing.SupportsIndex) -> None: ...
+    def detach(self, id: typing.SupportsInt | typing.SupportsIndex) -> None:
+        """
+        Removes geometry `id` (its id is not reused); refused while other scenes instance this one.
+        """
     def intersect(
         self,
         origins: typing.Any,
@@ -496,17 +499,35 @@ class RenderScene:
         """
         refit(id, mesh): mesh `id` takes the moved triangles of `mesh` (same count) and its tree is refitted; refit(): the top level follows the instanced scenes' refits.
         """
-    def set_mask(self, id: typing.SupportsInt | typing.SupportsIndex, mask: typing.Any) -> None: ...
+    def set_mask(self, id: typing.SupportsInt | typing.SupportsIndex, mask: typing.Any) -> None:
+        """
+        Sets the 32-bit mask of geometry `id`.
+        """
     @property
-    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """
+        ((xmin, ymin, zmin), (xmax, ymax, zmax)) of the committed top level.
+        """
     @property
-    def committed(self) -> bool: ...
+    def committed(self) -> bool:
+        """
+        Whether the top level is built over the current geometries.
+        """
     @property
-    def depth(self) -> int: ...
+    def depth(self) -> int:
+        """
+        Instance levels below this scene (0 with meshes only).
+        """
     @property
-    def geometry_count(self) -> int: ...
+    def geometry_count(self) -> int:
+        """
+        Attached meshes and instances.
+        """
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """
+        The name given, used in errors.
+        """
 
 def build(
     scene: Scene,

@@ -199,13 +199,14 @@ void bind_render_scene(py::module_& m) {
             py::arg("scene"), py::arg("transform"), py::arg("mask") = 0xFFFFFFFFu,
             "Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.")
         .def(
-            "detach", [](PyRenderScene& self, uint32_t id) { self.scene->detach(id); }, py::arg("id"))
+            "detach", [](PyRenderScene& self, uint32_t id) { self.scene->detach(id); }, py::arg("id"),
+            "Removes geometry `id` (its id is not reused); refused while other scenes instance this one.")
         .def(
             "set_mask",
             [](PyRenderScene& self, uint32_t id, const py::handle& mask) {
                 self.scene->set_mask(id, mask_of(mask, "mask"));
             },
-            py::arg("id"), py::arg("mask"))
+            py::arg("id"), py::arg("mask"), "Sets the 32-bit mask of geometry `id`.")
         .def(
             "commit", [](PyRenderScene& self) { self.scene->commit(); }, "Builds the top level over the geometries.")
         .def("refit", &refit, py::arg("id") = py::none(), py::arg("mesh") = py::none(),
@@ -217,14 +218,24 @@ void bind_render_scene(py::module_& m) {
              "-1 (and t = inf) where nothing is hit.")
         .def("occluded", &occluded, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = INFINITY, py::arg("mask") = 0xFFFFFFFFu, "Whether anything lies in [tmin, tmax].")
-        .def_property_readonly("name", [](const PyRenderScene& self) { return self.scene->name(); })
-        .def_property_readonly("committed", [](const PyRenderScene& self) { return self.scene->committed(); })
-        .def_property_readonly("depth", [](const PyRenderScene& self) { return self.scene->depth(); })
-        .def_property_readonly("geometry_count", [](const PyRenderScene& self) { return self.scene->geometry_count(); })
-        .def_property_readonly("bounds", [](const PyRenderScene& self) {
-            const AABB b = self.scene->bounds();
-            return py::make_tuple(py::make_tuple(b.lo.x, b.lo.y, b.lo.z), py::make_tuple(b.hi.x, b.hi.y, b.hi.z));
-        });
+        .def_property_readonly(
+            "name", [](const PyRenderScene& self) { return self.scene->name(); }, "The name given, used in errors.")
+        .def_property_readonly(
+            "committed", [](const PyRenderScene& self) { return self.scene->committed(); },
+            "Whether the top level is built over the current geometries.")
+        .def_property_readonly(
+            "depth", [](const PyRenderScene& self) { return self.scene->depth(); },
+            "Instance levels below this scene (0 with meshes only).")
+        .def_property_readonly(
+            "geometry_count", [](const PyRenderScene& self) { return self.scene->geometry_count(); },
+            "Attached meshes and instances.")
+        .def_property_readonly(
+            "bounds",
+            [](const PyRenderScene& self) {
+                const AABB b = self.scene->bounds();
+                return py::make_tuple(py::make_tuple(b.lo.x, b.lo.y, b.lo.z), py::make_tuple(b.hi.x, b.hi.y, b.hi.z));
+            },
+            "((xmin, ymin, zmin), (xmax, ymax, zmax)) of the committed top level.");
 }
 
 }  // namespace spacebvh::python
