@@ -17,11 +17,11 @@ class Error(RuntimeError, ValueError):
 
 __all__: list[str] = [
     "Bvh",
-    "DistanceQueries",
     "EmbreeTracer",
     "Error",
     "Quality",
     "RayQueries",
+    "RenderScene",
     "Scene",
     "Tracer",
     "Tracer64",
@@ -443,64 +443,90 @@ class Tracer64:
         The number of triangles traced.
         """
 
-class DistanceQueries:
+class RenderScene:
     """
-    Point queries over a tree: the closest point (the nearest triangle decided exactly, ties to the smaller id), unsigned and signed distance, generalized winding numbers and occupancy (docs/distance.md). Points are any array of shape (..., 3), float32 or float64, in the scene's coordinates; answers have the points' leading shape. Degenerate triangles are ignored. Batch calls release the GIL.
+    A scene of meshes and instances of other scenes (docs/scenes.md); spacebvh.Scene is one triangle mesh, a RenderScene many, placed.
     """
-    def __init__(self, bvh: Bvh, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
-        """
-        Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).
-        """
-    def closest_points(
+    def __init__(
         self,
-        points: typing.Any,
-        max_distance: typing.SupportsFloat | typing.SupportsIndex = ...,
-        *,
-        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
-    ) -> dict:
+        builder: str = "binned",
+        kernel: str = "auto",
+        name: str = "scene",
+        threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> None:
         """
-        The nearest point of the mesh within max_distance (inclusive) of each point: a dict of 'points' (..., 3) float64, 'distance' (...) float64, 'triangle_ids' (...) uint32, 'barycentrics' (..., 2) float64 (u, v of the second and third corners), 'feature' (...) uint8 (0 face, 1 2 3 edges v0v1 v1v2 v2v0, 4 5 6 vertices v0 v1 v2). Where nothing lies within max_distance: id 0xFFFFFFFF, distance inf, points NaN.
+        Each mesh's tree is built by `builder`; `kernel` is a single-ray kernel name (kernels()).
         """
-    def distance(
+    def attach_instance(self, scene: RenderScene, transform: typing.Any, mask: typing.Any = 4294967295) -> int:
+        """
+        Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.
+        """
+    def attach_mesh(self, mesh: Scene, mask: typing.Any = 4294967295) -> int:
+        """
+        Adds a spacebvh.Scene (float32 coordinates) as a mesh; returns its geometry id.
+        """
+    def commit(self) -> None:
+        """
+        Builds the top level over the geometries.
+        """
+    def detach(self, id: typing.SupportsInt | typing.SupportsIndex) -> None:
+        """
+        Removes geometry `id` (its id is not reused); refused while other scenes instance this one.
+        """
+    def intersect(
         self,
-        points: typing.Any,
-        max_distance: typing.SupportsFloat | typing.SupportsIndex = ...,
-        *,
-        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
-    ) -> numpy.typing.NDArray[numpy.float64]:
+        origins: typing.Any,
+        directions: typing.Any,
+        tmin: typing.Any = 0.0,
+        tmax: typing.Any = ...,
+        mask: typing.Any = 4294967295,
+    ) -> tuple:
         """
-        The distance to the mesh (inf where nothing lies within max_distance): float64 of the leading shape.
+        Closest hits: (t, primitive, u, v, geometry, instance) with instance (n, 4) ids from this scene down; -1 (and t = inf) where nothing is hit.
         """
-    def occupancy(
-        self, points: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex | None = None
+    def occluded(
+        self,
+        origins: typing.Any,
+        directions: typing.Any,
+        tmin: typing.Any = 0.0,
+        tmax: typing.Any = ...,
+        mask: typing.Any = 4294967295,
     ) -> numpy.typing.NDArray[numpy.bool]:
         """
-        Whether each point is inside the mesh by exact parity (RayQueries.contains of the point rounded to float32): bool of the leading shape.
+        Whether anything lies in [tmin, tmax].
         """
-    def signed_distance(
-        self,
-        points: typing.Any,
-        sign: str = "parity",
-        *,
-        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
-    ) -> numpy.typing.NDArray[numpy.float64]:
+    def refit(self, id: typing.SupportsInt | typing.SupportsIndex | None = None, mesh: Scene | None = None) -> None:
         """
-        The distance, negative inside: sign='parity' by exact containment (as RayQueries.contains, closed meshes), sign='winding' by the generalized winding number (inside where >= 0.5).
+        refit(id, mesh): mesh `id` takes the moved triangles of `mesh` (same count) and its tree is refitted; refit(): the top level follows the instanced scenes' refits.
         """
-    def winding_number(
-        self,
-        points: typing.Any,
-        accuracy: typing.SupportsFloat | typing.SupportsIndex = 0.0,
-        *,
-        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
-    ) -> numpy.typing.NDArray[numpy.float64]:
+    def set_mask(self, id: typing.SupportsInt | typing.SupportsIndex, mask: typing.Any) -> None:
         """
-        The generalized winding number: accuracy 0 the direct sum over every triangle (within the bound of docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs).
+        Sets the 32-bit mask of geometry `id`.
         """
     @property
-    def threads(self) -> int:
+    def bounds(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """
-        The default thread limit of batch calls (0 = every core).
+        ((xmin, ymin, zmin), (xmax, ymax, zmax)) of the committed top level.
+        """
+    @property
+    def committed(self) -> bool:
+        """
+        Whether the top level is built over the current geometries.
+        """
+    @property
+    def depth(self) -> int:
+        """
+        Instance levels below this scene (0 with meshes only).
+        """
+    @property
+    def geometry_count(self) -> int:
+        """
+        Attached meshes and instances.
+        """
+    @property
+    def name(self) -> str:
+        """
+        The name given, used in errors.
         """
 
 def build(

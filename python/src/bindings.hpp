@@ -95,9 +95,10 @@ py::class_<PyTracer> bind_tracer(py::module_& m);  // the class, for bind_render
 void bind_rays(py::module_& m);
 void bind_render(py::module_& m, py::class_<PyTracer>& tracer);
 void bind_embree(py::module_& m);
-void bind_queries(py::module_& m);   // queries.cpp: RayQueries
-void bind_float64(py::module_& m);   // float64.cpp: Tracer64
-void bind_distance(py::module_& m);  // distance.cpp: DistanceQueries
+void bind_queries(py::module_& m);       // queries.cpp: RayQueries
+void bind_float64(py::module_& m);       // float64.cpp: Tracer64
+void bind_distance(py::module_& m);      // distance.cpp: DistanceQueries
+void bind_render_scene(py::module_& m);  // render_scene.cpp: RenderScene
 
 // settings.cpp: build()'s recipe from its builder or quality and its keywords (exactly the settings
 // table's names); a recipe's settings as a dict; build()'s docstring, listing the settings.

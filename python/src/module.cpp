@@ -46,4 +46,5 @@ PYBIND11_MODULE(_core, m) {
     bind_queries(m);
     bind_float64(m);
     bind_distance(m);
+    bind_render_scene(m);
 }

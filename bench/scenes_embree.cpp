@@ -1,0 +1,280 @@
+// SPDX-License-Identifier: MIT
+// Instanced scenes, ours against Embree HIGH's two-level scene (instance geometries over one mesh
+// scene), on the same rays, in one process: N instances of one mesh placed by deterministic random
+// rotations, mirrors and non-uniform scales. Prints, side by side with ratios (medians of RUNS):
+// top-level build times; closest-hit and occlusion times on random and primary rays (ours with each
+// single-ray kernel, Embree rtcIntersect1/rtcOccluded1) with every answer checked against Embree's
+// (disagreements counted, not settled: instanced answers may differ at instance seams); the same
+// scene flattened into one spatial-split mesh where it fits; and the mesh's refit against its build.
+// Speeds are measurements, never asserted (bench/README.md).
+// Usage: spacebvh_scenes_bench SCENE INSTANCES RAYS [RUNS]   (SCENE: a file or builtin:NAME)
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "spacebvh/build.hpp"
+#include "spacebvh/presets.hpp"
+#include "spacebvh/scene.hpp"
+#include "spacebvh/tools/embree_scene.hpp"
+#include "spacebvh/tools/metrics.hpp"
+#include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/verify.hpp"
+
+using namespace spacebvh;
+
+namespace {
+
+double median_ms(int runs, const std::function<void()>& work) {
+    std::vector<double> ms;
+    for (int r = 0; r < runs; ++r) {
+        const auto start = std::chrono::steady_clock::now();
+        work();
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    return ms[ms.size() / 2];
+}
+
+// splitmix64 (docs/rays.md), for the placements.
+struct Random {
+    uint64_t state;
+    double next() {
+        uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+    }
+};
+
+// Instance k: a random rotation (axis, angle), scales in [0.5, 2] per axis, every third mirrored, on
+// a grid of cells `spacing` apart.
+std::vector<Affine> placements(size_t count, float spacing) {
+    Random random{47};
+    std::vector<Affine> out;
+    const size_t side = size_t(std::ceil(std::cbrt(double(count))));
+    for (size_t k = 0; k < count; ++k) {
+        const Vec3 axis =
+            normalize(Vec3(float(random.next() - 0.5), float(random.next() - 0.5), float(random.next() + 0.1)));
+        const double angle = random.next() * 2.0 * M_PI, c = std::cos(angle), s = std::sin(angle);
+        const double r[3][3] = {{c + axis.x * axis.x * (1 - c), axis.x * axis.y * (1 - c) - axis.z * s,
+                                 axis.x * axis.z * (1 - c) + axis.y * s},
+                                {axis.y * axis.x * (1 - c) + axis.z * s, c + axis.y * axis.y * (1 - c),
+                                 axis.y * axis.z * (1 - c) - axis.x * s},
+                                {axis.z * axis.x * (1 - c) - axis.y * s, axis.z * axis.y * (1 - c) + axis.x * s,
+                                 c + axis.z * axis.z * (1 - c)}};
+        const double scale[3] = {0.5 + 1.5 * random.next(), 0.5 + 1.5 * random.next(), 0.5 + 1.5 * random.next()};
+        const size_t cell[3] = {k % side, (k / side) % side, k / (side * side)};
+        Affine a;
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j)
+                a.m[4 * i + j] = float(scale[i] * r[i][j] * (k % 3 == 0 && j == 0 ? -1.0 : 1.0));
+            a.m[4 * i + 3] = float(cell[i]) * spacing;
+        }
+        out.push_back(a);
+    }
+    return out;
+}
+
+struct EmbreeTwoLevel {
+    RTCScene top = nullptr;
+    double build_ms = 0.0;
+    EmbreeTwoLevel(const tools::EmbreeScene& mesh, const std::vector<Affine>& placed) {
+        RTCDevice device = tools::embree_device();
+        top = rtcNewScene(device);
+        for (const Affine& a : placed) {
+            RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(instance, mesh.handle());
+            rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, a.m.data());
+            rtcCommitGeometry(instance);
+            rtcAttachGeometry(top, instance);
+            rtcReleaseGeometry(instance);
+        }
+        const auto start = std::chrono::steady_clock::now();
+        rtcCommitScene(top);
+        build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        tools::check_embree(device, "the two-level scene");
+    }
+    ~EmbreeTwoLevel() { rtcReleaseScene(top); }
+    void trace(std::span<const Ray> rays, std::span<float> t, bool occlusion) const {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              RTCIntersectContext context;
+                              rtcInitIntersectContext(&context);
+                              for (size_t i = range.begin(); i != range.end(); ++i) {
+                                  RTCRayHit rh{};
+                                  rh.ray = {rays[i].org.x,
+                                            rays[i].org.y,
+                                            rays[i].org.z,
+                                            rays[i].tmin,
+                                            rays[i].dir.x,
+                                            rays[i].dir.y,
+                                            rays[i].dir.z,
+                                            0.0f,
+                                            rays[i].tmax,
+                                            0xFFFFFFFFu,
+                                            0,
+                                            0};
+                                  rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                                  if (occlusion) {
+                                      rtcOccluded1(top, &context, &rh.ray);
+                                      t[i] = rh.ray.tfar < 0.0f ? 0.0f : kInfinity;
+                                  } else {
+                                      rtcIntersect1(top, &context, &rh);
+                                      t[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kInfinity : rh.ray.tfar;
+                                  }
+                              }
+                          });
+    }
+};
+
+void trace_ours(const RenderScene& scene, std::span<const Ray> rays, std::span<float> t, bool occlusion) {
+    if (occlusion) {
+        std::vector<uint8_t> blocked(rays.size());
+        scene.occluded(rays, blocked);
+        for (size_t i = 0; i < rays.size(); ++i) t[i] = blocked[i] ? 0.0f : kInfinity;
+        return;
+    }
+    std::vector<SceneHit> hits(rays.size());
+    scene.intersect(rays, hits);
+    for (size_t i = 0; i < rays.size(); ++i) t[i] = hits[i].t;
+}
+
+size_t disagreements(std::span<const Ray> rays, std::span<const float> a, std::span<const float> b, float diagonal) {
+    size_t n = 0;
+    for (size_t i = 0; i < rays.size(); ++i)
+        n += !tools::hits_agree({a[i], a[i] == kInfinity ? kInvalidIndex : 0},
+                                {b[i], b[i] == kInfinity ? kInvalidIndex : 0}, rays[i], diagonal);
+    return n;
+}
+
+// The same scene as one mesh (each instance's triangles taken to world space), built by the spatial
+// builder and traced by bvh8, against the two-level scene's bvh8 times, where it fits.
+void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, const std::vector<Ray>& random,
+               const std::vector<Ray>& primary, const std::vector<double>& two_level_ms, int runs) {
+    const size_t triangles = placed.size() * mesh.triangles.size();
+    if (triangles > 4'000'000) {
+        std::printf("flattened: %zu triangles, not built (over 4M)\n", triangles);
+        return;
+    }
+    tools::Scene flat;
+    flat.name = "flattened";
+    for (const Affine& a : placed)
+        for (const Triangle& t : mesh.triangles)
+            flat.triangles.push_back({a.apply(t.v0), a.apply(t.v1), a.apply(t.v2)});
+    const auto start = std::chrono::steady_clock::now();
+    const Bvh bvh = build(flat.mesh(), TreeRecipe::for_builder("spatial"));
+    const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const Tracer tracer(flat.mesh(), bvh, Kernel::bvh8);
+    const tools::EmbreeScene embree_flat(flat, tools::EmbreeQuality::high);
+    std::printf(
+        "flattened: %zu triangles, spatial build %.0f ms\n| rays | query | flattened bvh8 ms | two-level bvh8 ms "
+        "| flattened/two-level | Embree flattened ms | Embree flattened/ours flattened |\n",
+        triangles, build_ms);
+    size_t k = 0;
+    for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
+        for (bool occlusion : {false, true}) {
+            std::vector<Hit> hits(rays->size());
+            std::vector<uint8_t> blocked(rays->size());
+            const double ms = median_ms(runs, [&] {
+                if (occlusion)
+                    tracer.occluded(*rays, blocked);
+                else
+                    tracer.intersect(*rays, hits);
+            });
+            const double embree_ms = median_ms(runs, [&] {
+                if (occlusion)
+                    embree_flat.occluded(*rays, blocked);
+                else
+                    embree_flat.intersect(*rays, hits);
+            });
+            std::printf("| %s | %s | %.1f | %.1f | %.2f | %.1f | %.2f |\n", kind, occlusion ? "occluded" : "closest",
+                        ms, two_level_ms[k], ms / two_level_ms[k], embree_ms, embree_ms / ms);
+            ++k;
+        }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+    if (argc < 4) {
+        std::fprintf(stderr, "usage: %s SCENE INSTANCES RAYS [RUNS]\n", argv[0]);
+        return 2;
+    }
+    const tools::Scene mesh = tools::load_scene(argv[1]);
+    const size_t instances = std::stoul(argv[2]), ray_count = std::stoul(argv[3]);
+    const int runs = argc > 4 ? std::stoi(argv[4]) : 5;
+    const std::vector<Affine> placed = placements(instances, 1.5f * mesh.diagonal());
+    std::printf("%s: %zu triangles, %zu instances (%.3g instanced triangles), %zu rays, median of %d runs\n",
+                mesh.name.c_str(), mesh.triangles.size(), instances, double(instances) * double(mesh.triangles.size()),
+                ray_count, runs);
+
+    const tools::EmbreeScene embree_mesh(mesh, tools::EmbreeQuality::high);
+    SceneConfig config;
+    config.recipe = TreeRecipe::for_builder("spatial");
+    auto leaf = std::make_shared<RenderScene>(config, "mesh");
+    const uint32_t mesh_id = leaf->attach_mesh(mesh.mesh());
+    leaf->commit();
+    std::unique_ptr<EmbreeTwoLevel> embree;
+    const double embree_top_ms =
+        median_ms(runs, [&] { embree = std::make_unique<EmbreeTwoLevel>(embree_mesh, placed); });
+    std::unique_ptr<RenderScene> ours;
+    const double ours_top_ms = median_ms(runs, [&] {
+        ours.reset();
+        ours = std::make_unique<RenderScene>(config, "instances");
+        for (const Affine& a : placed) ours->attach_instance(leaf, a);
+        ours->commit();
+    });
+    std::printf("top level (attach + commit): ours %.2f ms, Embree %.2f ms (commit only), ours/Embree %.2f\n",
+                ours_top_ms, embree_top_ms, ours_top_ms / embree_top_ms);
+
+    const AABB world = ours->bounds();
+    const float diagonal = length(world.extent());
+    tools::Scene box_scene;
+    box_scene.triangles = {{world.lo, world.hi, world.lo}};
+    const std::vector<Ray> random = tools::generate_random_rays(world, ray_count, 1);
+    const uint32_t side = uint32_t(std::sqrt(double(ray_count)));
+    const std::vector<Ray> primary = tools::generate_primary_rays(tools::default_camera(box_scene), side, side);
+    std::printf("| rays | query | kernel | ours ms | Embree ms | Embree/ours | disagreements |\n");
+    std::vector<double> bvh8_ms;  // per ray kind and query, in the loop's order
+    for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
+        for (bool occlusion : {false, true}) {
+            std::vector<float> theirs(rays->size()), mine(rays->size());
+            const double embree_ms = median_ms(runs, [&] { embree->trace(*rays, theirs, occlusion); });
+            for (Kernel kernel : {Kernel::binary, Kernel::bvh4, Kernel::bvh8}) {
+                SceneConfig traced = config;
+                traced.tracer.kernel = kernel;
+                auto kleaf = std::make_shared<RenderScene>(traced, "mesh");
+                kleaf->attach_mesh(mesh.mesh());
+                kleaf->commit();
+                RenderScene top(traced, "instances");
+                for (const Affine& a : placed) top.attach_instance(kleaf, a);
+                top.commit();
+                const double ours_ms = median_ms(runs, [&] { trace_ours(top, *rays, mine, occlusion); });
+                if (kernel == Kernel::bvh8) bvh8_ms.push_back(ours_ms);
+                std::printf("| %s | %s | %s | %.1f | %.1f | %.2f | %zu |\n", kind, occlusion ? "occluded" : "closest",
+                            to_string(kernel), ours_ms, embree_ms, embree_ms / ours_ms,
+                            disagreements(*rays, mine, theirs, diagonal));
+            }
+        }
+
+    flattened(mesh, placed, random, primary, bvh8_ms, runs);
+
+    // Refit: the mesh's tree after its vertices moved (here: none moved, the cost is the same), against
+    // building it again.
+    const double refit_ms = median_ms(runs, [&] { leaf->refit(mesh_id); });
+    const double build_ms = median_ms(runs, [&] { (void)build(mesh.mesh(), TreeRecipe::for_builder("spatial")); });
+    std::printf("mesh refit %.2f ms (tree boxes and layout), spatial build %.2f ms, refit/build %.3f\n", refit_ms,
+                build_ms, refit_ms / build_ms);
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+}

@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// An instance's transform as tracing uses it: the float inverse that takes rays into the instance's
+// space (one fixed evaluation, docs/scenes.md), and the instance's box in the parent's space with
+// the padding that keeps the parent's box tests conservative for the ray that will be transformed.
+#pragma once
+
+#include <array>
+
+#include "spacebvh/geometry.hpp"
+#include "spacebvh/scene.hpp"
+
+namespace spacebvh::scene {
+
+// The largest condition number ||A|| * ||A^-1|| (infinity norms) an instance transform may have: the
+// padding bound below assumes the ray transform's rounding stays far below the box sizes.
+inline constexpr double kMaxConditionNumber = 65536.0;
+
+// A box-test allowance that grows with the ray origin: a reported hit at t on a ray r lies within
+// pad0 + pad1 * |r.org|_inf of the box it belongs to (docs/scenes.md, "Boxes of instances").
+struct Padding {
+    double pad0 = 0.0, pad1 = 0.0;
+};
+
+struct InstanceTransform {
+    std::array<float, 9> inverse{};        // A^-1 rounded to float, row-major
+    std::array<float, 3> inverse_shift{};  // -(A^-1 b) rounded to float
+    AABB box;                              // the child's box in the parent's space, rounded outward
+    Padding padding;                       // of box, for rays in the parent's space
+};
+
+// Validates `transform` and derives the above for a child whose root box is `child_box` with root
+// padding `child`. Throws Error starting with `what` for a non-finite, singular or too badly
+// conditioned transform.
+InstanceTransform make_instance_transform(const Affine& transform, const AABB& child_box, Padding child,
+                                          const std::string& what);
+
+// The box of `child_box` (in the child's space) seen from the parent with this transform (the exact
+// inverse of the float inverse, in double, rounded outward); used again by refit.
+void place_box(InstanceTransform& xf, const AABB& child_box, Padding child);
+
+// The ray in the instance's space: each coordinate of the origin and direction is the sum, left to
+// right in double, of the float products (exact in double) and the float shift, rounded once to
+// float. tmin and tmax are kept: t measures the same point on both rays.
+inline Ray to_instance(const InstanceTransform& xf, const Ray& ray) {
+    const auto& a = xf.inverse;
+    Ray out = ray;
+    for (int i = 0; i < 3; ++i) {
+        const double ox = double(a[3 * i]) * ray.org.x + double(a[3 * i + 1]) * ray.org.y +
+                          double(a[3 * i + 2]) * ray.org.z + double(xf.inverse_shift[i]);
+        const double dx =
+            double(a[3 * i]) * ray.dir.x + double(a[3 * i + 1]) * ray.dir.y + double(a[3 * i + 2]) * ray.dir.z;
+        out.org[i] = float(ox);
+        out.dir[i] = float(dx);
+    }
+    return out;
+}
+
+}  // namespace spacebvh::scene

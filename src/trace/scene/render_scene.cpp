@@ -1,0 +1,223 @@
+// SPDX-License-Identifier: MIT
+// RenderScene: attaching and detaching geometries, commit, refit, and the checks that keep a scene
+// either whole or unchanged (docs/scenes.md, "Errors").
+#include <algorithm>
+#include <string>
+
+#include "spacebvh/error.hpp"
+#include "trace/scene/scene_impl.hpp"
+
+namespace spacebvh {
+
+using scene::Geometry;
+using scene::InstanceRecord;
+using scene::MeshRecord;
+
+RenderScene::RenderScene(SceneConfig config, std::string name) : impl_(std::make_unique<Impl>()) {
+    const Kernel k = config.tracer.kernel;
+    if (k == Kernel::packet8 || k == Kernel::packet16)
+        throw Error(std::string("scene '") + name + "': kernel '" + to_string(k) +
+                    "' cannot trace scenes (single-ray kernels only: binary, bvh4, bvh8; docs/scenes.md)");
+    config.recipe.validate();
+    impl_->config = std::move(config);
+    impl_->name = std::move(name);
+}
+
+RenderScene::~RenderScene() {
+    for (const Geometry& g : impl_->geometries)
+        if (const InstanceRecord* inst = g.instance()) --inst->scene->impl_->instanced_by;
+}
+
+Geometry& RenderScene::Impl::geometry(uint32_t id) {
+    if (id >= geometries.size() || !geometries[id].alive())
+        throw Error("scene '" + name + "': no geometry with id " + std::to_string(id) +
+                    (id < geometries.size() ? " (detached)" : ""));
+    return geometries[id];
+}
+
+void RenderScene::Impl::check_unshared(const char* action) const {
+    if (instanced_by > 0)
+        throw Error("scene '" + name + "': cannot " + action + " while " + std::to_string(instanced_by.load()) +
+                    " instance(s) in other scenes use it (detach them first; refit() is allowed)");
+}
+
+void RenderScene::Impl::check_traceable() const {
+    if (!committed) throw Error("scene '" + name + "': not committed (call commit() after attaching or detaching)");
+    for (const auto& [child, generation] : children)
+        if (child->impl_->generation != generation)
+            throw Error("scene '" + name + "' instances scene '" + child->name() +
+                        "', which was refitted since: call refit() on this scene");
+}
+
+void RenderScene::Impl::list_children() {
+    children.clear();
+    for (uint32_t id : item_ids)
+        if (const InstanceRecord* inst = geometries[id].instance())
+            children.emplace_back(inst->scene.get(), inst->child_generation);
+    std::sort(children.begin(), children.end());
+    children.erase(std::unique(children.begin(), children.end()), children.end());
+}
+
+scene::TopLevelItem RenderScene::Impl::item_of(const Geometry& g) const {
+    if (const MeshRecord* mesh = g.mesh()) return {mesh->bvh.root().bounds, {}};
+    const InstanceRecord& inst = *g.instance();
+    return {inst.xf.box, inst.xf.padding};
+}
+
+namespace {
+
+uint32_t next_id(const std::vector<Geometry>& geometries, const std::string& name) {
+    if (geometries.size() >= kInvalidIndex) throw Error("scene '" + name + "': out of geometry ids");
+    return uint32_t(geometries.size());
+}
+
+}  // namespace
+
+uint32_t RenderScene::attach_mesh(const MeshView& mesh, uint32_t mask) {
+    return attach_mesh(mesh, impl_->config.recipe, mask);
+}
+
+uint32_t RenderScene::attach_mesh(const MeshView& mesh, const TreeRecipe& recipe, uint32_t mask) {
+    impl_->check_unshared("attach a mesh");
+    const uint32_t id = next_id(impl_->geometries, impl_->name);
+    MeshRecord record{mesh, recipe, {}, {}, {}, false};
+    record.view.named("scene '" + impl_->name + "' mesh " + std::to_string(id) + " ('" + mesh.name() + "')");
+    const TriangleStore store(record.view);
+    record.triangles.assign(store.triangles().begin(), store.triangles().end());
+    if (record.triangles.empty()) throw Error(record.view.name() + ": no triangles");
+    record.bvh = build(record.view, recipe);
+    record.duplicates = record.bvh.primitives.size() > record.triangles.size();
+    record.extent = scene::extent_of(record.bvh.root().bounds);
+    record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, impl_->config.tracer);
+    impl_->geometries.push_back({mask, std::move(record)});
+    impl_->committed = false;
+    return id;
+}
+
+uint32_t RenderScene::attach_instance(std::shared_ptr<const RenderScene> child, const Affine& transform,
+                                      uint32_t mask) {
+    impl_->check_unshared("attach an instance");
+    const uint32_t id = next_id(impl_->geometries, impl_->name);
+    const std::string what = impl_->what(id) + " (instance)";
+    if (!child) throw Error(what + ": no scene given");
+    if (child.get() == this) throw Error(what + ": a scene cannot instance itself");
+    if (!child->committed()) throw Error(what + ": scene '" + child->name() + "' is not committed");
+    const Impl& c = *child->impl_;
+    if (c.depth + 1 > kMaxInstanceLevels)
+        throw Error(what + ": scene '" + child->name() + "' nests " + std::to_string(c.depth) +
+                    " levels already; at most " + std::to_string(kMaxInstanceLevels) + " levels in all");
+    InstanceRecord record;
+    record.xf = scene::make_instance_transform(transform, c.bounds, c.root_padding, what);
+    record.transform = transform;
+    record.child_generation = c.generation;
+    record.scene = std::move(child);
+    ++c.instanced_by;
+    impl_->geometries.push_back({mask, std::move(record)});
+    impl_->committed = false;
+    return id;
+}
+
+void RenderScene::detach(uint32_t id) {
+    Geometry& g = impl_->geometry(id);
+    impl_->check_unshared(("detach geometry " + std::to_string(id)).c_str());
+    if (const InstanceRecord* inst = g.instance()) --inst->scene->impl_->instanced_by;
+    g.what = std::monostate{};
+    impl_->committed = false;
+}
+
+void RenderScene::set_mask(uint32_t id, uint32_t mask) { impl_->geometry(id).mask = mask; }
+
+void RenderScene::commit() {
+    Impl& s = *impl_;
+    s.check_unshared("commit");
+    std::vector<uint32_t> ids;
+    std::vector<scene::TopLevelItem> items;
+    uint32_t depth = 0;
+    for (uint32_t id = 0; id < s.geometries.size(); ++id) {
+        Geometry& g = s.geometries[id];
+        if (!g.alive()) continue;
+        if (InstanceRecord* inst = std::get_if<InstanceRecord>(&g.what)) {
+            // The child's box as it is now (it may have been refitted since it was attached).
+            const Impl& c = *inst->scene->impl_;
+            scene::place_box(inst->xf, c.bounds, c.root_padding);
+            inst->child_generation = c.generation;
+            depth = std::max(depth, c.depth + 1);
+        }
+        ids.push_back(id);
+        items.push_back(s.item_of(g));
+    }
+    if (ids.empty()) throw Error("scene '" + s.name + "': nothing to commit (no geometry attached)");
+    scene::TopLevel top = scene::build_top_level(items);
+    s.wide = scene::collapse_top_level(top.bvh);
+    s.top = std::move(top);
+    s.item_ids = std::move(ids);
+    s.items = std::move(items);
+    s.bounds = s.top.bvh.root().bounds;
+    s.root_padding = s.top.padding;
+    s.depth = depth;
+    s.list_children();
+    ++s.generation;
+    s.committed = true;
+}
+
+void RenderScene::refit(uint32_t id) {
+    Geometry& g = impl_->geometry(id);
+    MeshRecord* mesh = std::get_if<MeshRecord>(&g.what);
+    if (!mesh) throw Error(impl_->what(id) + " is an instance: refit() the scene it places, then refit() this one");
+    const TriangleStore store(mesh->view);
+    std::vector<Triangle> moved(store.triangles().begin(), store.triangles().end());
+    if (moved.size() != mesh->triangles.size())
+        throw Error(mesh->view.name() + ": refit needs the same triangles, got " + std::to_string(moved.size()) +
+                    " instead of " + std::to_string(mesh->triangles.size()));
+    Bvh bvh = mesh->bvh;
+    scene::refit_boxes(bvh, moved);
+    auto tracer = std::make_unique<Tracer>(MeshView(moved), bvh, impl_->config.tracer);
+    mesh->extent = scene::extent_of(bvh.root().bounds);
+    mesh->bvh = std::move(bvh);
+    mesh->triangles = std::move(moved);
+    mesh->tracer = std::move(tracer);
+    if (impl_->committed) refit();
+}
+
+void RenderScene::refit() {
+    Impl& s = *impl_;
+    if (!s.committed) throw Error("scene '" + s.name + "': refit() needs a committed scene (call commit())");
+    for (size_t k = 0; k < s.item_ids.size(); ++k) {
+        Geometry& g = s.geometries[s.item_ids[k]];
+        if (InstanceRecord* inst = std::get_if<InstanceRecord>(&g.what)) {
+            const Impl& c = *inst->scene->impl_;
+            scene::place_box(inst->xf, c.bounds, c.root_padding);
+            inst->child_generation = c.generation;
+        }
+        s.items[k] = s.item_of(g);
+    }
+    scene::refit_top_level(s.top, s.items);
+    s.wide = scene::collapse_top_level(s.top.bvh);
+    s.bounds = s.top.bvh.root().bounds;
+    s.root_padding = s.top.padding;
+    s.list_children();
+    ++s.generation;
+}
+
+const std::string& RenderScene::name() const { return impl_->name; }
+const SceneConfig& RenderScene::config() const { return impl_->config; }
+bool RenderScene::committed() const { return impl_->committed; }
+AABB RenderScene::bounds() const { return impl_->committed ? impl_->bounds : AABB{}; }
+uint32_t RenderScene::depth() const { return impl_->depth; }
+
+size_t RenderScene::geometry_count() const {
+    return size_t(
+        std::count_if(impl_->geometries.begin(), impl_->geometries.end(), [](const Geometry& g) { return g.alive(); }));
+}
+
+size_t RenderScene::memory_bytes() const {
+    size_t bytes = impl_->top.bvh.nodes.size() * sizeof(BvhNode) + impl_->top.bvh.primitives.size() * sizeof(uint32_t) +
+                   impl_->geometries.size() * sizeof(Geometry);
+    for (const Geometry& g : impl_->geometries)
+        if (const MeshRecord* mesh = g.mesh())
+            bytes += mesh->tracer->memory_bytes() + mesh->triangles.size() * sizeof(Triangle) +
+                     mesh->bvh.nodes.size() * sizeof(BvhNode) + mesh->bvh.primitives.size() * sizeof(uint32_t);
+    return bytes;
+}
+
+}  // namespace spacebvh

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+// What a RenderScene holds: its geometries by id (meshes with their trees and layouts, instances with
+// their transforms), the top level over them, and the walks that trace it (scene_walks.cpp).
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "spacebvh/scene.hpp"
+#include "trace/scene/instance_transform.hpp"
+#include "trace/scene/top_level.hpp"
+#include "trace/scene/top_level_wide.hpp"
+
+namespace spacebvh {
+
+namespace scene {
+
+struct MeshRecord {
+    MeshView view;  // the caller's buffers, read again by refit
+    TreeRecipe recipe;
+    Bvh bvh;                          // kept for refit and for filtered walks
+    std::vector<Triangle> triangles;  // the filtered walk's leaf data
+    std::unique_ptr<Tracer> tracer;
+    bool duplicates = false;  // some triangle is in several leaves (spatial splits)
+    double extent = 0.0;      // scene::extent_of(the tree's root box)
+};
+
+struct InstanceRecord {
+    std::shared_ptr<const RenderScene> scene;
+    Affine transform;
+    InstanceTransform xf;
+    uint64_t child_generation = 0;  // the child's generation when the box was taken
+};
+
+struct Geometry {
+    uint32_t mask = 0xFFFFFFFFu;
+    std::variant<std::monostate, MeshRecord, InstanceRecord> what;  // monostate: detached
+
+    bool alive() const { return what.index() != 0; }
+    const MeshRecord* mesh() const { return std::get_if<MeshRecord>(&what); }
+    const InstanceRecord* instance() const { return std::get_if<InstanceRecord>(&what); }
+};
+
+// The instance ids from the traced scene down to the scene being walked.
+using InstancePath = std::array<uint32_t, kMaxInstanceLevels>;
+
+// One query's state across levels.
+struct QueryState {
+    uint32_t mask;
+    const TraceContext* context;
+    const Ray* world_ray;
+    InstancePath path;
+};
+
+}  // namespace scene
+
+struct RenderScene::Impl {
+    SceneConfig config;
+    std::string name;
+    std::vector<scene::Geometry> geometries;  // by id
+    bool committed = false;
+    scene::TopLevel top;
+    std::vector<scene::TopNode4> wide;  // top.bvh collapsed, as the walks take it
+    std::vector<uint32_t> item_ids;     // top-level item -> geometry id
+    std::vector<scene::TopLevelItem> items;
+    AABB bounds;
+    scene::Padding root_padding;
+    uint32_t depth = 0;
+    // The distinct scenes instanced, with their generation when this scene's boxes were taken.
+    std::vector<std::pair<const RenderScene*, uint64_t>> children;
+    uint64_t generation = 1;                   // bumped by every commit and refit
+    mutable std::atomic<int> instanced_by{0};  // instances of this scene held by other scenes
+
+    std::string what(uint32_t id) const { return "scene '" + name + "': geometry " + std::to_string(id); }
+    scene::Geometry& geometry(uint32_t id);
+    void check_traceable() const;
+    void check_unshared(const char* action) const;
+    scene::TopLevelItem item_of(const scene::Geometry& g) const;
+    void list_children();
+
+    // The walks (scene_walks.cpp). The ray's tmax is the bound so far; `hit` keeps the best.
+    void closest(const Ray& ray, scene::QueryState& state, uint32_t level, SceneHit& hit) const;
+    bool occluded(const Ray& ray, scene::QueryState& state, uint32_t level) const;
+};
+
+}  // namespace spacebvh
