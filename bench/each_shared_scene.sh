@@ -4,7 +4,8 @@
 # scene's table is measured side by side), writing $BENCH_OUT/PREFIX_STEM.json (default bench/out/)
 # and printing the tables.
 # Stems: bunny sibenik coffee_maker crytek_sponza living_room_3 crytek_sponza_rotated (crytek_sponza
-# rotated 45/45/45), or those in $STEMS. RUNS=N repeats the whole loop N times (on a shared machine
+# rotated 45/45/45), or those in $STEMS, which may name built-in scenes too (builtin:interior, its
+# JSON named builtin_interior). RUNS=N repeats the whole loop N times (on a shared machine
 # Embree's rows vary between runs) and keeps each run's JSON in $BENCH_OUT/PREFIX_runs/RUN/. Used by
 # bench/PREFIX_shared_scenes.sh, whose command line it prints first.
 # Usage: [RUNS=N] bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
@@ -24,14 +25,17 @@ for run in $(seq 1 "$runs"); do
     [ "$runs" -gt 1 ] && echo "### Run $run of $runs" && echo
     for stem in "${stems[@]}"; do
         if [ "$stem" = crytek_sponza_rotated ]; then
-            scene=(crytek_sponza/crytek_sponza.obj --rotate x:45,y:45,z:45)
+            scene=("$scenes/crytek_sponza/crytek_sponza.obj" --rotate x:45,y:45,z:45)
+        elif [[ "$stem" == builtin:* ]]; then
+            scene=("$stem")
         else
-            scene=("$stem/$stem.obj")
+            scene=("$scenes/$stem/$stem.obj")
         fi
-        "$cli" compare "$scenes/${scene[0]}" "${scene[@]:1}" "$@" --json "$out/${prefix}_$stem.json" | grep -v '^# '
+        name=${stem/:/_}  # builtin:interior -> builtin_interior
+        "$cli" compare "${scene[@]}" "$@" --json "$out/${prefix}_$name.json" | grep -v '^# '
         if [ "$runs" -gt 1 ]; then
             mkdir -p "$out/${prefix}_runs/$run"
-            cp "$out/${prefix}_$stem.json" "$out/${prefix}_runs/$run/"
+            cp "$out/${prefix}_$name.json" "$out/${prefix}_runs/$run/"
         fi
     done
 done

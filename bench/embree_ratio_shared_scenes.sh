@@ -27,5 +27,5 @@ bash bench/each_shared_scene.sh embree_ratio "${common[@]}"
 if [ "$runs" -gt 1 ]; then
     python3 bench/summarize_best.py --embree-kernels --prefix embree_ratio $(seq -f "$out/embree_ratio_runs/%g" 1 "$runs")
 else
-    python3 bench/summarize_best.py --embree-kernels --prefix embree_ratio $(printf "$out/embree_ratio_%s.json " "${stems[@]}")
+    python3 bench/summarize_best.py --embree-kernels --prefix embree_ratio $(printf "$out/embree_ratio_%s.json " "${stems[@]/:/_}")
 fi

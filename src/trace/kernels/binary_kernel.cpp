@@ -56,44 +56,43 @@ void order_children(CompactNode& node) {
     node.word[0] |= uint32_t(axis) << 30;
 }
 
-// Per-ray constants of the two-box slab test. With FMA (native builds), per axis the fused slab
-// constants (FusedSlabs, traversal_common.hpp) of the entry planes in lanes 0,1 and of the exit planes
-// in lanes 2,3; without (portable builds, where a fused operation would be a slow library call), the
-// origin and inverse direction, and the exit distance widened by kFarScale instead.
+// Per-ray constants of the two-box slab test. kFused: per axis the fused slab constants (FusedSlabs,
+// traversal_common.hpp) of the entry planes in lanes 0,1 and of the exit planes in lanes 2,3; used
+// with FMA (native builds) for rays whose every axis has finite ones. Otherwise the origin and inverse
+// direction, and the exit distance widened by kFarScale: portable builds (where a fused operation
+// would be a slow library call), and rays with a direction component 0 (axis-aligned rays), along
+// which (p - o) * (1/d) = +-inf still culls every box whose slab misses the origin while the fused
+// constants of that axis would cull nothing.
+template <bool kFused>
 struct SlabRay {
-#ifdef __FMA__
-    __m128 scale[3], offset[3];
-#else
-    __m128 org[3], inv_dir[3];
-#endif
+    __m128 scale[3], offset[3];  // kFused
+    __m128 org[3], inv_dir[3];   // !kFused
 #ifdef __AVX__
     __m128i plane_order[3];  // lane permutation that puts the entry planes first (vpermilps)
 #else
     bool negative[3];
 #endif
-    explicit SlabRay(const Ray& ray) {
-        const FusedSlabs slabs(ray);
+    SlabRay(const Ray& ray, const FusedSlabs& slabs) {
         set_axis<0>(ray, slabs);
         set_axis<1>(ray, slabs);
         set_axis<2>(ray, slabs);
     }
     template <int kAxis>
     [[gnu::always_inline]] void set_axis(const Ray& ray, const FusedSlabs& slabs) {
-#ifdef __FMA__
-        (void)ray;
-        // Lanes 0,1 from the entry constants' lane kAxis, lanes 2,3 from the exit constants'.
-        constexpr int kAxisLanes = _MM_SHUFFLE(kAxis, kAxis, kAxis, kAxis);
-        scale[kAxis] = _mm_shuffle_ps(slabs.entry_scale, slabs.exit_scale, kAxisLanes);
-        offset[kAxis] = _mm_shuffle_ps(slabs.entry_offset, slabs.exit_offset, kAxisLanes);
-        // The entry plane follows the sign of the fused scale, which differs from the direction's
-        // where no axis has finite constants (FusedSlabs).
-        const bool negative_direction = (slabs.negative >> kAxis) & 1;
-#else
-        (void)slabs;
-        org[kAxis] = _mm_set1_ps(ray.org[kAxis]);
-        inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);           // +-inf for axis-parallel rays
-        const bool negative_direction = std::signbit(ray.dir[kAxis]);  // the sign of inv_dir, -0 included
-#endif
+        bool negative_direction;
+        if constexpr (kFused) {
+            // Lanes 0,1 from the entry constants' lane kAxis, lanes 2,3 from the exit constants'.
+            constexpr int kAxisLanes = _MM_SHUFFLE(kAxis, kAxis, kAxis, kAxis);
+            scale[kAxis] = _mm_shuffle_ps(slabs.entry_scale, slabs.exit_scale, kAxisLanes);
+            offset[kAxis] = _mm_shuffle_ps(slabs.entry_offset, slabs.exit_offset, kAxisLanes);
+            // The entry plane follows the sign of the fused scale, which differs from the direction's
+            // where no axis has finite constants (FusedSlabs).
+            negative_direction = (slabs.negative >> kAxis) & 1;
+        } else {
+            org[kAxis] = _mm_set1_ps(ray.org[kAxis]);
+            inv_dir[kAxis] = _mm_set1_ps(1.0f / ray.dir[kAxis]);  // +-inf for axis-parallel rays
+            negative_direction = std::signbit(ray.dir[kAxis]);    // the sign of inv_dir, -0 included
+        }
 #ifdef __AVX__
         plane_order[kAxis] = negative_direction ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
 #else
@@ -112,21 +111,14 @@ struct SlabRay {
 #else
         if (negative[axis]) ordered = _mm_shuffle_ps(ordered, ordered, _MM_SHUFFLE(1, 0, 3, 2));
 #endif
-#ifdef __FMA__
-        return _mm_fmsub_ps(ordered, scale[axis], offset[axis]);
-#else
+        if constexpr (kFused) return fused_multiply_subtract(ordered, scale[axis], offset[axis]);
         return _mm_mul_ps(_mm_sub_ps(ordered, org[axis]), inv_dir[axis]);
-#endif
     }
 
     // What the entry distances must not exceed, from the exit distances in lanes 0,1.
     [[gnu::always_inline]] __m128 exit_limit(__m128 exit, __m128 tmax) const {
-#ifdef __FMA__
-        (void)tmax;  // the exit distances started from tmax, and the fused form needs no widening
-        return exit;
-#else
+        if constexpr (kFused) return exit;  // the exit distances started from tmax, and need no widening
         return _mm_min_ps(_mm_mul_ps(exit, _mm_set1_ps(kFarScale)), tmax);
-#endif
     }
 };
 
@@ -137,7 +129,9 @@ struct SlabRay {
 // the same answers). A NaN or infinite distance (an
 // axis the ray does not move along; 0 * inf where it lies in a slab plane) leaves the running bound
 // unchanged, by the min/max operand order: boxes are closed.
-inline int intersect_children(const CompactNode& node, const SlabRay& slab, __m128 tmin, __m128 tmax, float entry[2]) {
+template <bool kFused>
+inline int intersect_children(const CompactNode& node, const SlabRay<kFused>& slab, __m128 tmin, __m128 tmax,
+                              float entry[2]) {
     __m128 near = tmin;
     __m128 far = tmax;
     for (int axis = 0; axis < 3; ++axis) {
@@ -164,9 +158,9 @@ template <bool kAnyHit, bool kStats>
 // of two inner children the one first along the ray's direction on the node's order axis is visited
 // first (the other for any hit). Stack entries keep their entry distance, so a subtree entered
 // beyond the closest hit found since it was pushed is skipped without fetching it.
-template <bool kAnyHit, bool kStats>
-bool traverse(const BinaryLayout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
-    const SlabRay slab(ray);
+template <bool kAnyHit, bool kStats, bool kFused>
+bool walk(const BinaryLayout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hit, TraversalStats* stats) {
+    const SlabRay<kFused> slab(ray, slabs);
     const WatertightRay shear(ray);
     const PackRay pack_ray(shear);
     const char* base = reinterpret_cast<const char*>(layout.buffer.data());
@@ -246,6 +240,18 @@ bool traverse(const BinaryLayout& layout, const Ray& ray, Hit& hit, TraversalSta
         } while (!kAnyHit && stack[top].entry > tmax);
         node_index = stack[top].node;
     }
+}
+
+// The fused box test for rays whose every axis has finite fused constants, with FMA; the
+// subtract-multiply one otherwise (SlabRay).
+template <bool kAnyHit, bool kStats>
+bool traverse(const BinaryLayout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+    const FusedSlabs slabs(ray);
+#ifdef __FMA__
+    if (slabs.finite_axes == 7) [[likely]]
+        return walk<kAnyHit, kStats, true>(layout, ray, slabs, hit, stats);
+#endif
+    return walk<kAnyHit, kStats, false>(layout, ray, slabs, hit, stats);
 }
 
 }  // namespace

@@ -9,68 +9,100 @@
 // order, returns their number), and kScalarTriangles (test leaf triangles one at a time with the scalar test, for the
 // reference kernel). No lambdas here: they would not inherit the target of the pragma region.
 
-// Per-ray constants of the single-ray box test: the fused slab constants of each axis
-// (traversal_common.hpp, FusedSlabs: why the test stays conservative) broadcast, and which plane of a
-// node's SoA boxes the ray enters through (the lower one for a positive direction) and which it
-// leaves through.
-template <class S>
+// Per-ray constants of the single-ray box test, and which plane of a node's SoA boxes the ray enters
+// through (the lower one for a positive direction) and which it leaves through.
+// kFused: the fused slab constants of each axis (traversal_common.hpp, FusedSlabs: why the test stays
+// conservative) broadcast; every axis must have finite ones. Otherwise (a direction component 0, as
+// axis-aligned rays have, or o / d beyond the float range) the origin and inverse direction of the
+// subtract-multiply test: there (p - o) * (1/d) with 1/d = +-inf is +-inf on the side of the slab the
+// origin is not on, and NaN (bound unchanged) on a plane through it, so the axis still culls every box
+// whose slab misses the origin; the fused constants of such an axis would cull nothing.
+template <class S, bool kFused>
 struct RayBoxes {
-    typename S::F entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];
+    typename S::F entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];  // kFused
+    typename S::F org[3], inv_dir[3];                                              // !kFused
     int entry_plane[3], exit_plane[3];
 
-    explicit RayBoxes(const Ray& ray) {
-        const FusedSlabs slabs(ray);
+    RayBoxes(const Ray& ray, const FusedSlabs& slabs) {
         for (int axis = 0; axis < 3; ++axis) {
-            entry_scale[axis] = S::set1(FusedSlabs::lane(slabs.entry_scale, axis));
-            entry_offset[axis] = S::set1(FusedSlabs::lane(slabs.entry_offset, axis));
-            exit_scale[axis] = S::set1(FusedSlabs::lane(slabs.exit_scale, axis));
-            exit_offset[axis] = S::set1(FusedSlabs::lane(slabs.exit_offset, axis));
-            const bool negative = (slabs.negative >> axis) & 1u;
+            bool negative;
+            if constexpr (kFused) {
+                entry_scale[axis] = S::set1(FusedSlabs::lane(slabs.entry_scale, axis));
+                entry_offset[axis] = S::set1(FusedSlabs::lane(slabs.entry_offset, axis));
+                exit_scale[axis] = S::set1(FusedSlabs::lane(slabs.exit_scale, axis));
+                exit_offset[axis] = S::set1(FusedSlabs::lane(slabs.exit_offset, axis));
+                negative = (slabs.negative >> axis) & 1u;
+            } else {
+                org[axis] = S::set1(ray.org[axis]);
+                inv_dir[axis] = S::set1(1.0f / ray.dir[axis]);
+                negative = std::signbit(ray.dir[axis]);  // the sign of 1/d, -0 included
+            }
             entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
             exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
         }
     }
 };
 
+// The slab distances of one axis from the planes the ray enters and leaves through: fused, or (p - o)
+// * (1/d), whose exit distances the caller widens by kFarScale (Ize 2013, as the packet kernel).
+template <class S, bool kFused>
+[[gnu::always_inline]] inline void slab_distances(typename S::F entry_planes, typename S::F exit_planes,
+                                                  const RayBoxes<S, kFused>& ray, int axis, typename S::F& t_entry,
+                                                  typename S::F& t_exit) {
+    if constexpr (kFused) {
+        t_entry = S::fmsub(entry_planes, ray.entry_scale[axis], ray.entry_offset[axis]);
+        t_exit = S::fmsub(exit_planes, ray.exit_scale[axis], ray.exit_offset[axis]);
+    } else {
+        t_entry = S::mul(S::sub(entry_planes, ray.org[axis]), ray.inv_dir[axis]);
+        t_exit = S::mul(S::sub(exit_planes, ray.org[axis]), ray.inv_dir[axis]);
+    }
+}
+
+// The mask of the children entered: near <= far, the far distance widened where the test is not fused.
+template <class S, bool kFused>
+[[gnu::always_inline]] inline unsigned entered_mask(typename S::F near, typename S::F far, float tmax) {
+    if constexpr (kFused) return S::hit_mask(near, far);
+    return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), S::set1(tmax)));
+}
+
 // Tests all child boxes of `node` for a single ray (RayBoxes): returns the mask of the children entered
 // within [tmin, tmax] (bit = slot) and sets `near` to every lane's entry distance. A NaN slab distance
-// (0 * inf: an empty slot on an axis the ray does not move along) leaves the running bound unchanged,
-// by the operand order of min and max.
-template <class S>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S>& ray,
+// (0 * inf: a plane through the origin on an axis the ray does not move along, or an empty slot there)
+// leaves the running bound unchanged, by the operand order of min and max.
+template <class S, bool kFused>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S, kFused>& ray,
                                                       float tmin, float tmax, typename S::F& near) {
     near = S::set1(tmin);
     typename S::F far = S::set1(tmax);
     for (int axis = 0; axis < 3; ++axis) {
-        const typename S::F t_entry =
-            S::fmsub(S::load(node.planes[ray.entry_plane[axis]]), ray.entry_scale[axis], ray.entry_offset[axis]);
-        const typename S::F t_exit =
-            S::fmsub(S::load(node.planes[ray.exit_plane[axis]]), ray.exit_scale[axis], ray.exit_offset[axis]);
+        typename S::F t_entry, t_exit;
+        slab_distances<S, kFused>(S::load(node.planes[ray.entry_plane[axis]]),
+                                  S::load(node.planes[ray.exit_plane[axis]]), ray, axis, t_entry, t_exit);
         near = S::max(t_entry, near);
         far = S::min(t_exit, far);
     }
-    return S::hit_mask(near, far);
+    return entered_mask<S, kFused>(near, far, tmax);
 }
 
 // The same for a quantized node (quantized_layout.hpp): each plane decoded exactly as the encoder
 // checked it, fma(float(code), scale, origin) rounded once, so the decoded box contains the child's
-// float box and the fused slab test on it stays conservative. Slots without a child are masked off.
+// float box and the slab test on it stays conservative. Slots without a child are masked off.
 // Needs the policy's load_u8 (eight codes to floats) and fmadd (8-wide policies only).
-template <class S>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S>& ray, float tmin,
-                                                      float tmax, typename S::F& near) {
+template <class S, bool kFused>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S, kFused>& ray,
+                                                      float tmin, float tmax, typename S::F& near) {
     near = S::set1(tmin);
     typename S::F far = S::set1(tmax);
     for (int axis = 0; axis < 3; ++axis) {
         const typename S::F scale = S::set1(node.scale[axis]), origin = S::set1(node.origin[axis]);
         const typename S::F entry_plane = S::fmadd(S::load_u8(node.q[ray.entry_plane[axis]]), scale, origin);
         const typename S::F exit_plane = S::fmadd(S::load_u8(node.q[ray.exit_plane[axis]]), scale, origin);
-        const typename S::F t_entry = S::fmsub(entry_plane, ray.entry_scale[axis], ray.entry_offset[axis]);
-        const typename S::F t_exit = S::fmsub(exit_plane, ray.exit_scale[axis], ray.exit_offset[axis]);
+        typename S::F t_entry, t_exit;
+        slab_distances<S, kFused>(entry_plane, exit_plane, ray, axis, t_entry, t_exit);
         near = S::max(t_entry, near);
         far = S::min(t_exit, far);
     }
-    return S::hit_mask(near, far) & node.used_mask;
+    return entered_mask<S, kFused>(near, far, tmax) & node.used_mask;
 }
 
 // The packet kernel's test of one ray against all child boxes (`Boxes`: its origin and inverse
@@ -184,11 +216,11 @@ template <int W, class Node>
 // on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
 // skipped when popped. kMoller: leaves take the moller leaf test (moller_filter.hpp) on layout.planes.
 // Layout: WideLayout<S::kLanes>, or QuantizedLayout8 for an 8-wide policy.
-template <class S, bool kAnyHit, bool kStats, bool kMoller = false, class Layout>
-bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+template <class S, bool kAnyHit, bool kStats, bool kMoller, bool kFused, class Layout>
+bool walk(const Layout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     using Node = typename decltype(layout.nodes)::value_type;
-    const RayBoxes<S> boxes(ray);
+    const RayBoxes<S, kFused> boxes(ray, slabs);
     // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and would
     // load them from memory at every node of a closest-hit walk.
     const Node* const nodes = layout.nodes.data();
@@ -215,7 +247,7 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.used(slot);
             typename S::F near;
-            unsigned mask = child_hit_mask<S>(node, boxes, tmin, tmax, near);
+            unsigned mask = child_hit_mask<S, kFused>(node, boxes, tmin, tmax, near);
             if (mask != 0) {
                 // As Embree's single-ray traversal does: the entered children straight from the mask;
                 // for the closest hit, one is followed at once (most nodes enter one), two are compared
@@ -291,4 +323,14 @@ bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* st
             current = stack[--top];
         } while (!kAnyHit && current.entry > tmax);
     }
+}
+
+// A ray with finite fused slab constants on every axis takes the fused box test; the others (axis-
+// aligned rays among them) the subtract-multiply one, which culls on every axis (RayBoxes).
+template <class S, bool kAnyHit, bool kStats, bool kMoller = false, class Layout>
+bool traverse(const Layout& layout, const Ray& ray, Hit& hit, TraversalStats* stats) {
+    const FusedSlabs slabs(ray);
+    if (slabs.finite_axes == 7) [[likely]]
+        return walk<S, kAnyHit, kStats, kMoller, true>(layout, ray, slabs, hit, stats);
+    return walk<S, kAnyHit, kStats, kMoller, false>(layout, ray, slabs, hit, stats);
 }

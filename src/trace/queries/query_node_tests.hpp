@@ -180,6 +180,11 @@ struct WideRay {
     }
 };
 
+// Whether a ray takes the fused test (WideSlabQuery): tmin >= 0 (the constants assume it) and finite
+// constants on every axis. Others, axis-aligned rays among them, take the binary layout's double
+// slabs (SlabRay), which cull on an axis the ray does not move along where the fused constants would not.
+inline bool wide_slabs_apply(const Ray& ray) { return ray.tmin >= 0.0f && FusedSlabs(ray).finite_axes == 7; }
+
 [[gnu::always_inline]] inline unsigned wide_children(const WideNode<8>& node, const WideRay& ray, float tmin,
                                                      float tmax, __m256& near) {
     near = _mm256_set1_ps(tmin);

@@ -75,7 +75,7 @@ template <class OnCrossing>
 template <class OnCrossing>
 inline void visit_crossings(const Layout& layout, RayContext& r, OnCrossing&& on_crossing) {
 #if defined(__AVX2__) && defined(__FMA__)
-    if (layout.has_wide && r.ray.tmin >= 0.0f) {
+    if (layout.has_wide && wide_slabs_apply(r.ray)) {
         float tmax = r.ray.tmax;
         walk(WideSlabQuery<ChildOrder::leaves_first>(layout.wide, r.ray), tmax, [&](const auto& leaf) {
             return visit_leaf(layout.wide.packs.data(), r, leaf.child, leaf.count, on_crossing);
@@ -125,7 +125,7 @@ void find_nearest(const Layout& layout, const Ray& ray, Nearest& nearest) {
     if (layout.nodes.empty()) return;
     RayContext r(ray);
 #if defined(__AVX2__) && defined(__FMA__)
-    if (layout.has_wide && ray.tmin >= 0.0f) {
+    if (layout.has_wide && wide_slabs_apply(ray)) {
         float tmax = ray.tmax;  // a float at or above the best t: boxes are entered conservatively up to it
         walk(WideSlabQuery<ChildOrder::nearest_first>(layout.wide, ray), tmax, [&](const auto& leaf) {
             visit_leaf(layout.wide.packs.data(), r, leaf.child, leaf.count,

@@ -41,7 +41,10 @@ inline constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0
 // Answers cannot change (the exact triangle test decides them); at most a few more boxes are entered.
 // An axis along which the ray does not move (d = 0, or a scale or offset not finite) gets scale 0 and
 // offsets +-inf, i.e. NaN or -+inf distances that leave the running bounds unchanged when min/max
-// keep the running bound as their second operand: it never culls (the other axes still do).
+// keep the running bound as their second operand: it never culls (the other axes still do), so a
+// ray along a coordinate axis would enter nearly every box its one moving axis allows. The wide
+// kernels therefore give such rays (finite_axes != 7) the subtract-multiply test instead
+// (wide_kernel.inl, RayBoxes), which culls on every axis.
 // When no axis is left (an origin so far out that o / d overflows on every axis), nothing would keep
 // the ray out of a wide node's unused slots, whose empty boxes only a culling axis rejects: lane 0
 // then gets scale 2^-149 and offsets +-FLT_MAX, so every finite plane gives -FLT_MAX (entry) and
@@ -50,7 +53,8 @@ inline constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0
 // Kernels.SceneBeyondTheFloatRangeBuildsAndAnswersExactly without the lane-0 constants.
 struct FusedSlabs {  // lane k: axis k (lane 3 unused)
     __m128 entry_scale, entry_offset, exit_scale, exit_offset;
-    unsigned negative;  // bit k: the direction is negative along axis k (the ray enters through the upper plane)
+    unsigned negative;     // bit k: the direction is negative along axis k (the ray enters through the upper plane)
+    unsigned finite_axes;  // bit k: axis k has finite constants (it culls)
 
     // Made in a few vector instructions for the three axes at once: every ray pays for them, and many
     // of the binary kernel's primary and occlusion rays visit only a dozen nodes, where constants made
@@ -76,7 +80,8 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
         exit_offset = _mm_or_ps(_mm_and_ps(finite, _mm_sub_ps(exit_scaled_org, exit_slack)),
                                 _mm_andnot_ps(finite, minus_infinity));
         negative = unsigned(_mm_movemask_ps(inv)) & 7u;
-        if ((_mm_movemask_ps(finite) & 7) == 0) [[unlikely]] {
+        finite_axes = unsigned(_mm_movemask_ps(finite)) & 7u;
+        if (finite_axes == 0) [[unlikely]] {
             const float largest = std::numeric_limits<float>::max();
             entry_scale = _mm_move_ss(entry_scale, _mm_set_ss(0x1p-149f));
             exit_scale = _mm_move_ss(exit_scale, _mm_set_ss(0x1p-149f));
