@@ -17,6 +17,7 @@ class Error(RuntimeError, ValueError):
 
 __all__: list[str] = [
     "Bvh",
+    "DistanceQueries",
     "EmbreeTracer",
     "Error",
     "Quality",
@@ -441,6 +442,66 @@ class Tracer64:
     def triangle_count(self) -> int:
         """
         The number of triangles traced.
+        """
+
+class DistanceQueries:
+    """
+    Point queries over a tree: the closest point (the nearest triangle decided exactly, ties to the smaller id), unsigned and signed distance, generalized winding numbers and occupancy (docs/distance.md). Points are any array of shape (..., 3), float32 or float64, in the scene's coordinates; answers have the points' leading shape. Degenerate triangles are ignored. Batch calls release the GIL.
+    """
+    def __init__(self, bvh: Bvh, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> None:
+        """
+        Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).
+        """
+    def closest_points(
+        self,
+        points: typing.Any,
+        max_distance: typing.SupportsFloat | typing.SupportsIndex = ...,
+        *,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> dict:
+        """
+        The nearest point of the mesh within max_distance (inclusive) of each point: a dict of 'points' (..., 3) float64, 'distance' (...) float64, 'triangle_ids' (...) uint32, 'barycentrics' (..., 2) float64 (u, v of the second and third corners), 'feature' (...) uint8 (0 face, 1 2 3 edges v0v1 v1v2 v2v0, 4 5 6 vertices v0 v1 v2). Where nothing lies within max_distance: id 0xFFFFFFFF, distance inf, points NaN.
+        """
+    def distance(
+        self,
+        points: typing.Any,
+        max_distance: typing.SupportsFloat | typing.SupportsIndex = ...,
+        *,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        The distance to the mesh (inf where nothing lies within max_distance): float64 of the leading shape.
+        """
+    def occupancy(
+        self, points: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex | None = None
+    ) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        Whether each point is inside the mesh by exact parity (RayQueries.contains of the point rounded to float32): bool of the leading shape.
+        """
+    def signed_distance(
+        self,
+        points: typing.Any,
+        sign: str = "parity",
+        *,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        The distance, negative inside: sign='parity' by exact containment (as RayQueries.contains, closed meshes), sign='winding' by the generalized winding number (inside where >= 0.5).
+        """
+    def winding_number(
+        self,
+        points: typing.Any,
+        accuracy: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+        *,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> numpy.typing.NDArray[numpy.float64]:
+        """
+        The generalized winding number: accuracy 0 the direct sum over every triangle (within the bound of docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs).
+        """
+    @property
+    def threads(self) -> int:
+        """
+        The default thread limit of batch calls (0 = every core).
         """
 
 class RenderScene:
