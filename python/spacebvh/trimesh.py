@@ -190,11 +190,15 @@ class RayMeshIntersector:
         queries = self.queries
         if queries is None or len(points) == 0:
             return result
-        bounds = np.asarray(self.mesh.bounds, dtype=np.float64)
-        # Two reductions settle the common case (every point in the box) without a mask per point.
-        if np.all(points.min(axis=0) >= bounds[0]) and np.all(points.max(axis=0) <= bounds[1]):
+        lo, hi = np.asarray(self.mesh.bounds, dtype=np.float64)
+        # Column by column: NumPy reduces one strided column several times faster than axis 0 of an
+        # (n, 3) array. The extremes settle the common case (every point in the box) without a mask.
+        columns = [points[:, axis] for axis in range(3)]
+        if all(column.min() >= lo[axis] and column.max() <= hi[axis] for axis, column in enumerate(columns)):
             return queries.contains(points)
-        inside_box = np.all((points >= bounds[0]) & (points <= bounds[1]), axis=1)
+        inside_box = np.ones(len(points), dtype=bool)
+        for axis, column in enumerate(columns):
+            inside_box &= (column >= lo[axis]) & (column <= hi[axis])
         if inside_box.any():
             result[inside_box] = queries.contains(points[inside_box])
         return result
