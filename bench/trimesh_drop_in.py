@@ -77,7 +77,7 @@ def overhead_on(name, vertices, faces, args):
         (
             "intersects_location (multiple)",
             lambda: ray.intersects_location(o, d, multiple_hits=True),
-            lambda: queries.all(o, d, max_hits=100, details=False),
+            lambda: queries.all(o, d, max_hits=100, points=True, details=False),
         ),
         ("contains_points", lambda: ray.contains_points(points), lambda: queries.contains(points)),
     ]
