@@ -655,7 +655,8 @@ TEST(Kernels, VisitKeysSortInTheClosestHitVisitOrder) {
 
 // The fused slab constants, made for three axes at once in vector instructions, are bit for bit the
 // formula of traversal_common.hpp computed one axis at a time: rays of every magnitude, axis-parallel
-// ones (+0 and -0), and directions so small that 1/d overflows.
+// ones (+0 and -0), directions so small that 1/d overflows, and origins at 0 on an axis, whose offsets
+// must not be subnormal (every fused test would take them as an operand, in microcode on x86).
 TEST(FusedSlabs, AreTheScalarFormulaBitForBit) {
     std::mt19937 random(5);
     std::uniform_real_distribution<float> unit(-1.0f, 1.0f), exponent(-30.0f, 30.0f);
@@ -668,6 +669,12 @@ TEST(FusedSlabs, AreTheScalarFormulaBitForBit) {
             ray.dir[axis] = special;
             rays.push_back(ray);
         }
+    for (float zero : {0.0f, -0.0f})
+        for (int axis = 0; axis < 3; ++axis) {
+            Ray ray{{value(), value(), value()}, {value(), value(), value()}};
+            ray.org[axis] = zero;
+            rays.push_back(ray);
+        }
     auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
     for (const Ray& ray : rays) {
         const trace::FusedSlabs slabs(ray);
@@ -678,9 +685,13 @@ TEST(FusedSlabs, AreTheScalarFormulaBitForBit) {
             float entry_scale = 0.0f, exit_scale = 0.0f, entry_offset = kInfinity, exit_offset = -kInfinity;
             if (std::isfinite(exit_inv) && std::isfinite(exit_scaled_org)) {
                 entry_scale = inv;
-                entry_offset = scaled_org + (std::fabs(scaled_org) * 0x1p-21f + 0x1p-140f);
+                entry_offset = scaled_org + (std::fabs(scaled_org) * 0x1p-21f + 0x1p-126f);
                 exit_scale = exit_inv;
-                exit_offset = exit_scaled_org - (std::fabs(exit_scaled_org) * 0x1p-21f + 0x1p-140f);
+                exit_offset = exit_scaled_org - (std::fabs(exit_scaled_org) * 0x1p-21f + 0x1p-126f);
+            }
+            if (ray.org[axis] == 0.0f) {
+                EXPECT_NE(std::fpclassify(trace::FusedSlabs::lane(slabs.entry_offset, axis)), FP_SUBNORMAL) << axis;
+                EXPECT_NE(std::fpclassify(trace::FusedSlabs::lane(slabs.exit_offset, axis)), FP_SUBNORMAL) << axis;
             }
             EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.entry_scale, axis)), bits(entry_scale)) << axis;
             EXPECT_EQ(bits(trace::FusedSlabs::lane(slabs.entry_offset, axis)), bits(entry_offset)) << axis;

@@ -37,7 +37,10 @@ inline constexpr float kFarScale = 1.0f + 2.0f * (3.0f * 0x1p-24f) / (1.0f - 3.0
 // K in [s (1 - u)^2, s (1 + u)^2]; the exit offset is fl(o R) lowered past its rounding, so
 // p R - offset >= K t and the fused result is at least s (1 - u)^3 t >= (1 + u)^2 t, no less than any
 // entry distance of the same box: the widening of Ize ("Robust BVH Ray Traversal", JCGT 2013) folded
-// into the constants. Both slacks add 2^-140 for values in the subnormal range.
+// into the constants. Both slacks add 2^-126, the smallest normal float, for values in the subnormal
+// range: an origin coordinate of exactly 0 then gives offsets of +-2^-126, not a subnormal that every
+// fused test of the ray would take as an operand (x86 handles subnormal operands in microcode, several
+// times slower, and cameras and ray origins at 0 are common).
 // Answers cannot change (the exact triangle test decides them); at most a few more boxes are entered.
 // An axis along which the ray does not move (d = 0, or a scale or offset not finite) gets scale 0 and
 // offsets +-inf, i.e. NaN or -+inf distances that leave the running bounds unchanged when min/max
@@ -91,10 +94,10 @@ struct FusedSlabs {  // lane k: axis k (lane 3 unused)
         }
     }
 
-    // |x| 2^-21 + 2^-140: the slack of an offset x.
+    // |x| 2^-21 + 2^-126: the slack of an offset x.
     static __m128 slack(__m128 x) {
         const __m128 magnitude = _mm_and_ps(x, _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff)));
-        return _mm_add_ps(_mm_mul_ps(magnitude, _mm_set1_ps(0x1p-21f)), _mm_set1_ps(0x1p-140f));
+        return _mm_add_ps(_mm_mul_ps(magnitude, _mm_set1_ps(0x1p-21f)), _mm_set1_ps(0x1p-126f));
     }
 
     static float lane(__m128 values, int axis) {
