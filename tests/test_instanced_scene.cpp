@@ -196,4 +196,18 @@ TEST(SceneMemory, EstimateBoundsTheMeasuredSize) {
     }
 }
 
+TEST(SceneMemory, ABuildBeyondTheLimitIsRefusedBeforeItStarts) {
+    SceneConfig config;
+    config.recipe.limits.memory_limit_bytes = 4 << 20;
+    const InstancedScene forest = load_instanced_scene("builtin:forest:100");
+    try {
+        make_render_scene(forest, config);
+        ADD_FAILURE() << "built";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("instanced scene 'forest:100' (100 placements"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("the memory limit of 4.0 MiB"), std::string::npos) << e.what();
+    }
+}
+
 }  // namespace

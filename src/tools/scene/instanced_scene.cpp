@@ -200,6 +200,9 @@ InstancedScene load_instanced_scene(std::string_view spec, const SceneTransform&
 std::shared_ptr<RenderScene> make_render_scene(const InstancedScene& scene, const SceneConfig& config) {
     std::vector<const InstancedScene*> order;
     collect_scenes(scene, 0, order);
+    check_memory_estimate("instanced scene '" + scene.name + "' (" + std::to_string(scene.placement_count()) +
+                              " placements of " + std::to_string(scene.unique_triangle_count()) + " triangles)",
+                          estimate_scene_memory(scene, config).total(), config.recipe.limits.memory_limit_bytes);
     std::map<const InstancedScene*, std::shared_ptr<RenderScene>> built;
     for (const InstancedScene* level : order) {
         std::vector<std::shared_ptr<RenderScene>> meshes(level->meshes.size());
