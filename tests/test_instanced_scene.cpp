@@ -59,6 +59,13 @@ TEST(Forest, DeterministicPlacementsWithMirrorsAndNonUniformScales) {
         EXPECT_GT(std::max({column[0], column[1], column[2]}) / std::min({column[0], column[1], column[2]}),
                   1.0 + 1e-6);
     }
+    const AABB box = a.bounds();  // a grid of 23 x 23 cells of 3 units, trees up to about 10 high
+    EXPECT_GT(box.extent().x, 60.0f);
+    EXPECT_LT(box.extent().x, 80.0f);
+    EXPECT_GT(box.extent().y, 4.0f);
+    const Camera camera = instanced_scene_camera(a);
+    EXPECT_LT(camera.eye.x, box.lo.x);
+    EXPECT_GT(camera.eye.y, 0.0f);
     EXPECT_GT(mirrored, 60u);
     EXPECT_LT(mirrored, 200u);
     for (size_t count : per_mesh) EXPECT_GT(count, 50u);

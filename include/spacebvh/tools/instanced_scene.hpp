@@ -47,6 +47,9 @@ struct InstancedScene {
     uint64_t instanced_triangle_count() const;
     // Placements of meshes down all levels (an instance of a nested scene counts its placements).
     uint64_t placement_count() const;
+    // The box of every mesh's box placed (its corners by the composed transform): for cameras and
+    // reports, not a bound to the last ulp (RenderScene::bounds() is the traced one).
+    AABB bounds() const;
 };
 
 // A placement flattened to one level: a mesh of `scene` (the scene object that holds it) and the
@@ -79,6 +82,11 @@ bool is_instanced_scene_spec(std::string_view spec);
 InstancedScene load_instanced_scene(std::string_view spec, const SceneTransform& transform = {});
 
 inline constexpr uint64_t kMaxForestInstances = 1'000'000;
+
+// A camera for an instanced scene: for builtin:forest:N a view across the forest from above one
+// corner (eye at about tree height over the first cells, looking towards the far corner); otherwise
+// default_camera's rule (scene.hpp) on bounds().
+Camera instanced_scene_camera(const InstancedScene& scene);
 
 // The RenderScene of `scene`: one RenderScene per mesh (each tree built once with config.recipe, mask
 // all ones), instanced by the top scene with each instance's transform and mask; nested scenes become

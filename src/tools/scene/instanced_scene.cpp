@@ -138,6 +138,39 @@ uint64_t InstancedScene::placement_count() const {
     return total;
 }
 
+AABB InstancedScene::bounds() const {
+    AABB box;
+    std::map<const Scene*, AABB> mesh_boxes;
+    walk_placements(
+        *this, Affine64{}, ~0u, 0, [&](const InstancedScene& s, uint32_t mesh, const Affine64& transform, uint32_t) {
+            const Scene& m = s.meshes[mesh];
+            auto [it, fresh] = mesh_boxes.try_emplace(&m);
+            if (fresh) it->second = m.bounds();
+            const AABB& b = it->second;
+            const Affine placed = transform.rounded();
+            for (int c = 0; c < 8; ++c)
+                box.extend(
+                    placed.apply({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
+        });
+    return box;
+}
+
+Camera instanced_scene_camera(const InstancedScene& scene) {
+    const AABB box = scene.bounds();
+    if (scene.name.starts_with("forest:")) {
+        // Trees stand on y ~ 0 with +y up; the grid starts at the origin's corner of x and z.
+        Camera camera;
+        const Vec3 extent = box.extent();
+        camera.eye = {box.lo.x - 0.02f * extent.x, 12.0f, box.lo.z - 0.02f * extent.z};
+        camera.target = {box.lo.x + 0.5f * extent.x, 0.0f, box.lo.z + 0.5f * extent.z};
+        camera.fovy_degrees = 50.0f;
+        return camera;
+    }
+    Scene boxes;
+    boxes.triangles.push_back({box.lo, box.hi, box.lo});
+    return default_camera(boxes);
+}
+
 std::vector<FlatPlacement> flatten_placements(const InstancedScene& scene, uint64_t max_placements) {
     std::vector<FlatPlacement> out;
     walk_placements(scene, Affine64{}, ~0u, 0,
