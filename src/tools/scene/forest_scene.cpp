@@ -68,7 +68,7 @@ std::vector<Triangle> conifer() {
         t, rings, segments, [](int r) { return 0.6 + 3.4 * r / (rings - 1.0); },
         [](int r, int s) {
             const double along = double(r) / (rings - 1);
-            const double tier = std::fmod(along * 5.0, 1.0);  // each tier widens downwards
+            const double tier = 1.0 - std::fmod(along * 5.0, 1.0);  // each tier widens downwards
             return (1.0 - along) * (0.35 + 0.65 * tier) * 1.1 * (1.0 + wobble(r, s, 0.08));
         });
     return t;
