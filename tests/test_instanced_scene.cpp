@@ -196,6 +196,29 @@ TEST(InstancedScene, NestedScenesFlattenAndBuildEachSceneOnce) {
     EXPECT_THROW(flatten_scene(top, 1000), Error);
 }
 
+// Three levels of a thousand instances each: 10^9 placements, counted without walking them.
+TEST(InstancedScene, CountsOfDeepNestsCostTheDescriptionNotThePlacements) {
+    const InstancedScene forest = load_instanced_scene("builtin:forest:1000");
+    auto level = std::make_shared<const InstancedScene>(forest);
+    for (int depth = 2; depth <= 3; ++depth) {
+        auto next = std::make_shared<InstancedScene>();
+        next->name = "level " + std::to_string(depth);
+        for (int i = 0; i < 1000; ++i) {
+            SceneInstance instance;
+            instance.scene = level;
+            instance.transform.m[3] = 200.0f * float(i);
+            next->instances.push_back(instance);
+        }
+        level = next;
+    }
+    EXPECT_EQ(level->depth(), 3u);
+    EXPECT_EQ(level->placement_count(), 1'000'000'000u);
+    EXPECT_EQ(level->instanced_triangle_count(), 1'000'000u * forest.instanced_triangle_count());
+    EXPECT_EQ(level->unique_triangle_count(), forest.unique_triangle_count());
+    EXPECT_GT(level->bounds().extent().x, 200.0f * 999.0f);
+    EXPECT_THROW(flatten_placements(*level), Error);  // refused before walking 10^8 placements
+}
+
 TEST(InstancedScene, BadDescriptionsAreRefused) {
     InstancedScene scene = load_instanced_scene("builtin:forest:3");
     scene.instances[1].mesh = 9;

@@ -47,8 +47,9 @@ struct InstancedScene {
     uint64_t instanced_triangle_count() const;
     // Placements of meshes down all levels (an instance of a nested scene counts its placements).
     uint64_t placement_count() const;
-    // The box of every mesh's box placed (its corners by the composed transform): for cameras and
-    // reports, not a bound to the last ulp (RenderScene::bounds() is the traced one).
+    // The placed meshes' boxes: each mesh's box corners placed by its instance's transform, nested
+    // scenes box by box. For cameras and reports, not a bound to the last ulp (RenderScene::bounds() is
+    // the traced one). This and the counts cost the scene objects' sizes, not the placements'.
     AABB bounds() const;
 };
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 
 #include "tools/scene/instanced_internal.hpp"
 #include "tools/scene/scene_internal.hpp"
@@ -107,12 +108,53 @@ std::string invalid_instance_transform(const Affine& transform) {
 
 }  // namespace scene_detail
 
-uint32_t InstancedScene::depth() const {
-    uint32_t deepest = 0;
-    for (const SceneInstance& instance : instances)
-        deepest = std::max(deepest, instance.scene ? instance.scene->depth() : 0u);
-    return instances.empty() ? 0 : deepest + 1;
+namespace {
+
+// What one scene object places, folded over its instances once (children first), so that counts of
+// nested descriptions cost the objects' sizes, not the (multiplied) placements. Counts saturate.
+struct Totals {
+    uint32_t depth = 0;
+    uint64_t placements = 0, triangles = 0;
+    AABB box;
+};
+
+uint64_t saturating_add(uint64_t a, uint64_t b) { return a > UINT64_MAX - b ? UINT64_MAX : a + b; }
+
+void place_box(const AABB& b, const Affine& transform, AABB& out) {
+    for (int c = 0; c < 8; ++c)
+        out.extend(transform.apply({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
 }
+
+Totals totals_of(const InstancedScene& top) {
+    std::vector<const InstancedScene*> order;
+    collect_scenes(top, 0, order);
+    std::map<const InstancedScene*, Totals> done;
+    for (const InstancedScene* scene : order) {
+        Totals t;
+        std::vector<std::optional<AABB>> mesh_boxes(scene->meshes.size());
+        for (uint32_t m : used_meshes(*scene)) mesh_boxes[m] = scene->meshes[m].bounds();
+        for (const SceneInstance& instance : scene->instances) {
+            if (instance.scene) {
+                const Totals& child = done.at(instance.scene.get());
+                t.depth = std::max(t.depth, child.depth);
+                t.placements = saturating_add(t.placements, child.placements);
+                t.triangles = saturating_add(t.triangles, child.triangles);
+                if (!child.box.is_empty()) place_box(child.box, instance.transform, t.box);
+            } else {
+                ++t.placements;
+                t.triangles = saturating_add(t.triangles, scene->meshes[instance.mesh].triangles.size());
+                place_box(*mesh_boxes[instance.mesh], instance.transform, t.box);
+            }
+        }
+        if (!scene->instances.empty()) ++t.depth;
+        done[scene] = t;
+    }
+    return done.at(&top);
+}
+
+}  // namespace
+
+uint32_t InstancedScene::depth() const { return totals_of(*this).depth; }
 
 uint64_t InstancedScene::unique_triangle_count() const {
     std::vector<const InstancedScene*> scenes;
@@ -123,37 +165,11 @@ uint64_t InstancedScene::unique_triangle_count() const {
     return total;
 }
 
-uint64_t InstancedScene::instanced_triangle_count() const {
-    uint64_t total = 0;
-    walk_placements(*this, Affine64{}, ~0u, 0, [&](const InstancedScene& s, uint32_t mesh, const Affine64&, uint32_t) {
-        total += s.meshes[mesh].triangles.size();
-    });
-    return total;
-}
+uint64_t InstancedScene::instanced_triangle_count() const { return totals_of(*this).triangles; }
 
-uint64_t InstancedScene::placement_count() const {
-    uint64_t total = 0;
-    walk_placements(*this, Affine64{}, ~0u, 0,
-                    [&](const InstancedScene&, uint32_t, const Affine64&, uint32_t) { ++total; });
-    return total;
-}
+uint64_t InstancedScene::placement_count() const { return totals_of(*this).placements; }
 
-AABB InstancedScene::bounds() const {
-    AABB box;
-    std::map<const Scene*, AABB> mesh_boxes;
-    walk_placements(
-        *this, Affine64{}, ~0u, 0, [&](const InstancedScene& s, uint32_t mesh, const Affine64& transform, uint32_t) {
-            const Scene& m = s.meshes[mesh];
-            auto [it, fresh] = mesh_boxes.try_emplace(&m);
-            if (fresh) it->second = m.bounds();
-            const AABB& b = it->second;
-            const Affine placed = transform.rounded();
-            for (int c = 0; c < 8; ++c)
-                box.extend(
-                    placed.apply({(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z}));
-        });
-    return box;
-}
+AABB InstancedScene::bounds() const { return totals_of(*this).box; }
 
 Camera instanced_scene_camera(const InstancedScene& scene) {
     const AABB box = scene.bounds();
@@ -172,12 +188,14 @@ Camera instanced_scene_camera(const InstancedScene& scene) {
 }
 
 std::vector<FlatPlacement> flatten_placements(const InstancedScene& scene, uint64_t max_placements) {
+    const uint64_t count = scene.placement_count();
+    if (count > max_placements)
+        throw Error("instanced scene '" + scene.name + "': " + std::to_string(count) + " placements, more than the " +
+                    std::to_string(max_placements) + " a flattened list may hold");
     std::vector<FlatPlacement> out;
+    out.reserve(count);
     walk_placements(scene, Affine64{}, ~0u, 0,
                     [&](const InstancedScene& s, uint32_t mesh, const Affine64& transform, uint32_t mask) {
-                        if (out.size() >= max_placements)
-                            throw Error("instanced scene '" + scene.name + "': more than " +
-                                        std::to_string(max_placements) + " placements to flatten");
                         out.push_back({&s, mesh, transform.rounded(), mask});
                     });
     return out;
