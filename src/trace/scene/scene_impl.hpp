@@ -66,8 +66,8 @@ struct RenderScene::Impl {
     std::vector<scene::Geometry> geometries;  // by id
     bool committed = false;
     scene::TopLevel top;
-    std::vector<scene::TopNode4> wide;  // top.bvh collapsed, as the walks take it
-    std::vector<uint32_t> item_ids;     // top-level item -> geometry id
+    std::vector<scene::TopNode> wide;  // top.bvh collapsed, as the walks take it
+    std::vector<uint32_t> item_ids;    // top-level item -> geometry id
     std::vector<scene::TopLevelItem> items;
     AABB bounds;
     scene::Padding root_padding;

@@ -61,9 +61,9 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
 namespace {
 
 // Emits the node whose children are `slots` (binary node indices), then their subtrees.
-uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode4>& out) {
-    // Open the inner child of largest area until four children (Embree's collapse rule).
-    while (slots.size() < 4) {
+uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode>& out) {
+    // Open the inner child of largest area until kTopWidth children (Embree's collapse rule).
+    while (slots.size() < size_t(kTopWidth)) {
         int widest = -1;
         for (int k = 0; k < int(slots.size()); ++k)
             if (!bvh.nodes[slots[k]].is_leaf() &&
@@ -91,8 +91,8 @@ uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode4>
 
 }  // namespace
 
-std::vector<TopNode4> collapse_top_level(const Bvh& bvh) {
-    std::vector<TopNode4> nodes;
+std::vector<TopNode> collapse_top_level(const Bvh& bvh) {
+    std::vector<TopNode> nodes;
     const BvhNode& root = bvh.root();
     emit(bvh, root.is_leaf() ? std::vector<uint32_t>{0} : std::vector<uint32_t>{root.first, root.first + 1}, nodes);
     return nodes;
