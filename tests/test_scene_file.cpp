@@ -168,8 +168,8 @@ TEST(SceneFile, TruncatedAndCorruptedFilesGiveClearErrors) {
 }
 
 // Damage past the checksum (the checksum repaired, as a deliberate edit would): still an Error
-// naming what is wrong, or a scene that answers as the arbiter; never a crash.
-TEST(SceneFile, AlteredFilesWithARepairedChecksumAreRefusedOrStillExact) {
+// naming what is wrong, or a scene that loads and traces; never a crash.
+TEST(SceneFile, AlteredFilesWithARepairedChecksumAreRefusedOrTraceSafely) {
     TwoLevels scene;
     const std::vector<std::byte> bytes = serialize_render_scene(*scene.top.scene);
     const auto repaired = [](std::vector<std::byte> b) {
