@@ -21,7 +21,7 @@ namespace spacebvh::tools {
 // One mesh as a scene places it: the instance transforms from the traced scene down (top level
 // first; none for a mesh attached to the traced scene itself) and the ids a hit on it reports.
 struct MeshPlacement {
-    uint32_t mesh = 0;              // index into the scene's meshes
+    uint32_t mesh = 0;               // index into the scene's meshes
     std::vector<Affine> transforms;  // top level first
     std::array<uint32_t, kMaxInstanceLevels> path{kInvalidIndex, kInvalidIndex, kInvalidIndex, kInvalidIndex};
     uint32_t geometry = 0;  // the mesh's id in the scene that holds it

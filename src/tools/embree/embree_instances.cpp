@@ -135,8 +135,8 @@ void EmbreeInstancedScene::intersect16(std::span<const Ray> rays, std::span<Scen
     check_sizes(rays.size(), hits.size(), "intersect16 (two-level)");
     for_each_packet(rays, top_, [&](size_t group, int lanes, const RTCRayHit16& packet) {
         for (int i = 0; i < lanes; ++i)
-            hits[group + i] = to_hit(packet.hit.instID[0][i], packet.hit.primID[i], packet.ray.tfar[i],
-                                     packet.hit.u[i], packet.hit.v[i]);
+            hits[group + i] = to_hit(packet.hit.instID[0][i], packet.hit.primID[i], packet.ray.tfar[i], packet.hit.u[i],
+                                     packet.hit.v[i]);
     });
 }
 

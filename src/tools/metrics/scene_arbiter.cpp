@@ -58,8 +58,8 @@ double condition_number(const Affine& a) {
     double norm = 0.0, inverse_norm = 0.0;
     for (int r = 0; r < 3; ++r) {
         norm = std::max(norm, std::abs(m(r, 0)) + std::abs(m(r, 1)) + std::abs(m(r, 2)));
-        inverse_norm = std::max(inverse_norm, (std::abs(cof[r][0]) + std::abs(cof[r][1]) + std::abs(cof[r][2])) /
-                                                  std::abs(det));
+        inverse_norm =
+            std::max(inverse_norm, (std::abs(cof[r][0]) + std::abs(cof[r][1]) + std::abs(cof[r][2])) / std::abs(det));
     }
     return norm * inverse_norm;
 }
@@ -99,7 +99,8 @@ struct SceneArbiter::Impl {
     }
     Ray local(size_t p, const Ray& ray) const {
         Ray r = ray;
-        for (size_t level = first_level[p]; level < first_level[p + 1]; ++level) r = scene::to_instance(inverse[level], r);
+        for (size_t level = first_level[p]; level < first_level[p + 1]; ++level)
+            r = scene::to_instance(inverse[level], r);
         return r;
     }
 };
@@ -134,8 +135,8 @@ SceneArbiter::SceneArbiter(std::span<const Scene> meshes, std::vector<MeshPlacem
             reach += std::max({std::abs(a.m[3]), std::abs(a.m[7]), std::abs(a.m[11])});
         }
         for (const Affine& a : placement.transforms)
-            s.inverse.push_back(scene::make_instance_transform(
-                a, AABB{Vec3(0.0f), Vec3(1.0f)}, {}, "scene arbiter: placement " + std::to_string(p)));
+            s.inverse.push_back(scene::make_instance_transform(a, AABB{Vec3(0.0f), Vec3(1.0f)}, {},
+                                                               "scene arbiter: placement " + std::to_string(p)));
         s.first_level.push_back(s.inverse.size());
         s.world.push_back(box);
         s.pad_scale.push_back(kWorldPadding * cond);
