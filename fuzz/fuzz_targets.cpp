@@ -12,6 +12,9 @@
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/trace.hpp"
 #include "spacebvh/tree_file.hpp"
+#include "spacebvh/scene.hpp"
+#include "spacebvh/tools/instanced_scene.hpp"
+#include "tools/scene/instanced_internal.hpp"
 #include "tools/scene/scene_internal.hpp"
 
 namespace spacebvh::fuzz {
@@ -83,6 +86,20 @@ void feed_tree_file(std::span<const uint8_t> bytes) {
     trace_all(bvh);
 }
 
+// A glTF as an instanced scene, built (binned trees, so that a hostile file cannot ask for a slow
+// build) and traced: the instances' transforms reach RenderScene's checks and the ray transform.
+void feed_gltf_instances(std::span<const uint8_t> bytes) {
+    const tools::InstancedScene scene = tools::scene_detail::parse_gltf_instanced(as_text(bytes), "fuzz.gltf");
+    const std::shared_ptr<RenderScene> render = tools::make_render_scene(scene, SceneConfig{});
+    const std::vector<Ray> rays = tools::generate_random_rays(render->bounds(), 32, 1);
+    std::vector<SceneHit> hits(rays.size());
+    render->intersect(rays, hits);
+    for (const SceneHit& hit : hits)
+        if (hit.is_hit() && (hit.instance[0] >= scene.instances.size() ||
+                             hit.primitive >= scene.meshes[scene.instances[hit.instance[0]].mesh].triangles.size()))
+            throw std::logic_error("fuzz: an instanced glTF's hit names instance " + std::to_string(hit.instance[0]));
+}
+
 // The row syntax and the settings' ranges only: building the tree a valid row asks for can take
 // seconds by design (grid=64 with lookahead), which a fuzzer would report as a hang.
 void feed_builder_spec(std::span<const uint8_t> bytes) {
@@ -93,8 +110,8 @@ void feed_builder_spec(std::span<const uint8_t> bytes) {
 }  // namespace
 
 const std::vector<std::string>& target_names() {
-    static const std::vector<std::string> names = {"obj",      "ply",       "gltf",        "ray_file",
-                                                   "hit_file", "tree_file", "builder_spec"};
+    static const std::vector<std::string> names = {"obj",      "ply",      "gltf",      "gltf_instances",
+                                                   "ray_file", "hit_file", "tree_file", "builder_spec"};
     return names;
 }
 
@@ -106,6 +123,8 @@ void feed(std::string_view target, std::span<const uint8_t> bytes) {
         parse_ply(as_text(bytes), "fuzz.ply");
     else if (target == "gltf")
         parse_gltf(as_text(bytes), "fuzz.gltf");
+    else if (target == "gltf_instances")
+        feed_gltf_instances(bytes);
     else if (target == "ray_file")
         tools::read_ray_file(memory_stream(bytes), "fuzz.rays");
     else if (target == "hit_file")

@@ -13,7 +13,8 @@
 
 namespace spacebvh::fuzz {
 
-// obj, ply, gltf (.gltf and GLB bytes), ray_file, hit_file, tree_file, builder_spec.
+// obj, ply, gltf (.gltf and GLB bytes), gltf_instances (the same bytes as an instanced scene, built and
+// traced), ray_file, hit_file, tree_file, builder_spec.
 const std::vector<std::string>& target_names();
 
 // Feeds `bytes` to the reader named `target` and uses what it returns (a loaded tree is traced by

@@ -203,6 +203,43 @@ std::string gltf_bytes(const IndexedMesh& mesh, int index_type, int mode, bool g
     return out;
 }
 
+// glTF 2.0 as an instanced scene: the mesh placed by three nodes (a parent's T * R * S, a mirroring
+// matrix child, a root) and by a node with EXT_mesh_gpu_instancing entries (translations, rotations
+// as normalized shorts, scales).
+std::string gltf_instanced_bytes(const IndexedMesh& mesh) {
+    std::string buffer;
+    for (const Vec3& p : mesh.vertices)
+        for (int axis = 0; axis < 3; ++axis) put_binary(buffer, p[axis], false);
+    const size_t index_offset = buffer.size();
+    for (uint32_t i : mesh.indices) put_binary<uint32_t>(buffer, i, false);
+    const size_t entries_offset = buffer.size();
+    for (float v : {0.0f, 0.0f, 0.0f, 5.0f, 1.0f, -2.0f, -4.0f, 3.0f, 8.0f}) put_binary(buffer, v, false);
+    const size_t rotations_offset = buffer.size();
+    for (int16_t v : {0, 0, 0, 32767, 0, 23170, 0, 23170, 16384, 16384, 16384, 16384})
+        put_binary<int16_t>(buffer, v, false);
+    const size_t scales_offset = buffer.size();
+    for (float v : {1.0f, 1.0f, 1.0f, -1.0f, 2.0f, 0.5f, 0.3f, 0.3f, 0.3f}) put_binary(buffer, v, false);
+    std::ostringstream json;
+    json << R"({"asset":{"version":"2.0"},"extensionsUsed":["EXT_mesh_gpu_instancing"],"scene":0,)"
+         << R"("scenes":[{"nodes":[0,2,3]}],"nodes":[)"
+         << R"({"children":[1],"translation":[1,2,3],"rotation":[0,0,0.7071068,0.7071068],"scale":[1,2,1],"mesh":0},)"
+         << R"({"mesh":0,"matrix":[-1,0,0,0,0,1,0,0,0,0,1,0,0.5,0,0,1]},{"mesh":0,"translation":[9,0,0]},)"
+         << R"({"mesh":0,"extensions":{"EXT_mesh_gpu_instancing":{"attributes":{"TRANSLATION":2,"ROTATION":3,)"
+         << R"("SCALE":4}}}}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],)"
+         << R"("accessors":[{"bufferView":0,"componentType":5126,"count":)" << mesh.vertices.size()
+         << R"(,"type":"VEC3"},{"bufferView":1,"componentType":5125,"count":)" << mesh.indices.size()
+         << R"(,"type":"SCALAR"},{"bufferView":2,"componentType":5126,"count":3,"type":"VEC3"},)"
+         << R"({"bufferView":3,"componentType":5122,"normalized":true,"count":3,"type":"VEC4"},)"
+         << R"({"bufferView":4,"componentType":5126,"count":3,"type":"VEC3"}],"bufferViews":[)";
+    const size_t offsets[] = {0, index_offset, entries_offset, rotations_offset, scales_offset, buffer.size()};
+    for (int v = 0; v < 5; ++v)
+        json << (v ? "," : "") << R"({"buffer":0,"byteOffset":)" << offsets[v] << R"(,"byteLength":)"
+             << offsets[v + 1] - offsets[v] << "}";
+    json << R"(],"buffers":[{"byteLength":)" << buffer.size() << R"(,"uri":"data:application/octet-stream;base64,)"
+         << base64(buffer) << R"("}]})";
+    return json.str();
+}
+
 std::string read_bytes(const fs::path& path, size_t limit) {
     std::ifstream in(path, std::ios::binary);
     std::string bytes(limit, '\0');
@@ -241,6 +278,8 @@ int main(int argc, char** argv) {
         write_seed("gltf", name + "_u16_strip.gltf", gltf_bytes(mesh, 5123, 5, false));
         write_seed("gltf", name + "_u32.glb", gltf_bytes(mesh, 5125, 4, true));
         write_seed("gltf", name + "_u16_fan.glb", gltf_bytes(mesh, 5123, 6, true));
+        write_seed("gltf_instances", name + "_nodes.gltf", gltf_instanced_bytes(mesh));
+        write_seed("gltf_instances", name + "_u32.glb", gltf_bytes(mesh, 5125, 4, true));
     }
 
     // Ray and hit files through the writers, then read back as bytes.

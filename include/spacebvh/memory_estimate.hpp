@@ -7,7 +7,10 @@
 #include <cstdint>
 #include <string>
 
+#include <span>
+
 #include "spacebvh/build.hpp"
+#include "spacebvh/scene.hpp"
 
 namespace spacebvh {
 
@@ -22,6 +25,24 @@ struct MemoryEstimate {
 // triangles the measured peak RSS is 0.90 to 1.00 of the scene's bytes plus this (bench/scale.sh
 // prints both).
 MemoryEstimate estimate_build_memory(uint64_t triangle_count, const BuildConfig& config, bool indexed_mesh = false);
+
+// The memory a RenderScene needs, known before anything is built: what its meshes keep (each mesh's
+// tree, the filtered walk's triangle copy and the kernel's layout), what each instance and each top
+// level keeps, and the scratch of the largest single build (meshes are built one after another, so
+// their scratch is not summed). The bytes kept are an upper estimate; RenderScene::memory_bytes()
+// reports the measured size (tests/test_instanced_scene.cpp states the factor between them).
+struct SceneMemoryEstimate {
+    uint64_t mesh_bytes = 0;      // kept by the meshes, each mesh once however many instances place it
+    uint64_t instance_bytes = 0;  // kept per instance and by the top levels
+    uint64_t build_bytes = 0;     // the largest build's scratch beyond what it keeps (a mesh's or a top level's)
+    uint64_t total() const { return mesh_bytes + instance_bytes + build_bytes; }
+};
+
+// `mesh_triangle_counts`: one entry per mesh built (each once), with config.recipe;
+// `instance_count`: the instances of all scenes together; `top_levels`: the scenes committed (each
+// mesh sits in a scene of its own when it is instanced, so count those too).
+SceneMemoryEstimate estimate_scene_memory(std::span<const uint64_t> mesh_triangle_counts, uint64_t instance_count,
+                                          uint64_t top_levels, const SceneConfig& config);
 
 // MemAvailable of /proc/meminfo in bytes: what a new allocation can take without swapping out other
 // programs. 0 where it is unknown (no /proc/meminfo).
