@@ -7,10 +7,11 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli_support.hpp"
-#include "instanced_shim.hpp"  // TEMPORARY
+#include "spacebvh/tools/instanced_scene.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/scene_arbiter.hpp"
 #include "spacebvh/tools/verify.hpp"
@@ -26,23 +27,11 @@ namespace {
 
 constexpr const char* kForest = "builtin:forest:12";
 
-// Every placement of the description: instance k of the top scene places its mesh as geometry 0.
-std::vector<MeshPlacement> forest_placements(const InstancedScene& scene) {
-    std::vector<MeshPlacement> out;
-    for (size_t k = 0; k < scene.instances.size(); ++k) {
-        MeshPlacement p;
-        p.mesh = scene.instances[k].mesh;
-        p.transforms = {scene.instances[k].transform};
-        p.path[0] = uint32_t(k);
-        out.push_back(p);
-    }
-    return out;
-}
-
 // The forest's exact arbiter, made from the scene description the tests load themselves.
 struct ForestReference {
     InstancedScene scene = load_instanced_scene(kForest);
-    SceneArbiter arbiter{scene.meshes, forest_placements(scene)};
+    ScenePlacements placed = mesh_placements_of(scene);
+    SceneArbiter arbiter{placed.meshes, placed.placements};
 };
 
 }  // namespace
@@ -57,8 +46,9 @@ TEST_F(Cli, InfoOnAnInstancedScene) {
     EXPECT_EQ(json["meshes"], reference.scene.meshes.size());
     uint64_t instanced = 0;
     for (const MeshPlacement& p : reference.arbiter.placements())
-        instanced += reference.scene.meshes[p.mesh].triangles.size();
+        instanced += reference.placed.meshes[p.mesh].triangles.size();
     EXPECT_EQ(json["instanced_triangles"], instanced);
+    EXPECT_EQ(json["instanced_triangles"], reference.scene.instanced_triangle_count());
     EXPECT_GT(json["instanced_triangles"].get<uint64_t>(), json["triangles"].get<uint64_t>());
     EXPECT_GT(json["estimated_build_bytes"].get<uint64_t>(), 0u);
 }
@@ -152,7 +142,65 @@ TEST_F(Cli, CompareAnInstancedSceneAgainstEmbreesTwoLevelScene) {
 
 TEST_F(Cli, BadInstancedSpecsFailCleanly) {
     for (const char* spec : {"builtin:forest:0", "builtin:forest:abc", "builtin:forest:1e13", "builtin:forest:-5"})
-        for (const char* command : {"info", "build"}) expect_clean_failure(std::string(command) + " " + spec, {"forest"});
-    expect_clean_failure(std::string("info ") + kForest + " --rotate x:30", {"--rotate"});
+        for (const char* command : {"info", "build"})
+            expect_clean_failure(std::string(command) + " " + spec, {"forest"});
+    // The load-time transform moves every instance.
+    CliResult r = run(std::string("info ") + kForest + " --translate 1000 0 0 --json moved.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = run(std::string("info ") + kForest + " --json here.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NEAR(read_json("moved.json")["bounds"][0][0].get<double>(),
+                read_json("here.json")["bounds"][0][0].get<double>() + 1000.0, 1.0);
     expect_clean_failure(std::string("compare ") + kForest + " --tree t.bvh", {"--tree"});
+}
+
+namespace {
+
+// A glTF (its JSON, then its NAME.bin) of one tetrahedron mesh placed by `nodes` translated nodes.
+std::pair<std::string, std::string> gltf_files(const std::string& name, int nodes) {
+    const float p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    std::string bin;
+    for (const auto& face : faces)
+        for (int k : face) bin.append(reinterpret_cast<const char*>(p[k]), sizeof p[k]);
+    std::string node_list, node_ids;
+    for (int n = 0; n < nodes; ++n) {
+        node_list += std::string(n ? "," : "") + R"({"mesh":0,"translation":[)" + std::to_string(2 * n) + ",0.5," +
+                     std::to_string(n % 2) + "]}";
+        node_ids += std::string(n ? "," : "") + std::to_string(n);
+    }
+    return {R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[)" + node_ids + R"(]}],"nodes":[)" + node_list +
+                R"(],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],)"
+                R"("accessors":[{"bufferView":0,"componentType":5126,"count":12,"type":"VEC3",)"
+                R"("min":[0,0,0],"max":[1,1,1]}],"bufferViews":[{"buffer":0,"byteLength":144}],)"
+                R"("buffers":[{"uri":")" +
+                name + R"(.bin","byteLength":144}]})",
+            bin};
+}
+
+}  // namespace
+
+// A glTF whose nodes place its mesh three times is an instanced scene; one that places it once stays
+// one mesh with today's output.
+TEST_F(Cli, GltfNodeInstancingOnTheCommandLine) {
+    for (const auto& [name, nodes] : {std::pair{"three", 3}, std::pair{"one", 1}}) {
+        const auto [gltf, bin] = gltf_files(name, nodes);
+        write(std::string(name) + ".gltf", gltf);
+        write(std::string(name) + ".bin", bin);
+    }
+    CliResult r = run("info three.gltf --json three.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(read_json("three.json")["instances"], 3);
+    EXPECT_EQ(read_json("three.json")["instanced_triangles"], 12);
+    r = run("info one.gltf --json one.json");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(read_json("one.json").contains("instances"));
+    EXPECT_EQ(read_json("one.json")["triangles"], 4);
+    nlohmann::json rows;
+    ASSERT_NO_FATAL_FAILURE(
+        compare_rows("three.gltf --builders spatial --embree high --embree-packets none "
+                     "--random 2000 --width 24 --height 24 --runs 1 --build-runs 1 --no-epo",
+                     2, rows));
+    for (const nlohmann::json& row : rows)
+        for (const char* kind : {"random", "primary", "diffuse"}) EXPECT_EQ(row[kind]["wrong"], 0) << kind;
 }

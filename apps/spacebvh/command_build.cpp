@@ -140,7 +140,10 @@ void build_instances(const BuildOptions& options, const TreeRecipe& recipe) {
     std::printf("builder          %s (each mesh's tree), %u threads\n", builder.c_str(),
                 options.common.effective_threads());
     std::printf("build            %.1f ms (every mesh's tree and layout, the instances, the top levels)\n", build_ms);
-    std::printf("bytes            %zu (the meshes' layouts, top levels, transforms)\n", scene->memory_bytes());
+    std::printf(
+        "bytes            %zu (the top scene: its top level and instances; the meshes' own scenes not "
+        "counted)\n",
+        scene->memory_bytes());
     std::printf("peak memory      %.1f MiB (resident, whole process); the build's estimate %.1f MiB\n",
                 double(peak) / 1048576.0, double(estimate) / 1048576.0);
     write_json(options.common.json_path, {{"scene", input.name()},

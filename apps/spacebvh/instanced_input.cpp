@@ -13,32 +13,40 @@ using namespace spacebvh::tools;
 
 namespace {
 
-// Every placement of a mesh in the scene the description makes (make_render_scene: a scene per mesh
-// holding it as geometry 0, instanced by the top scene in order, so instance k has id k).
-std::vector<MeshPlacement> placements_of(const InstancedScene& scene) {
-    std::vector<MeshPlacement> out(scene.instances.size());
-    for (size_t k = 0; k < scene.instances.size(); ++k) {
-        out[k].mesh = scene.instances[k].mesh;
-        out[k].transforms = {scene.instances[k].transform};
-        out[k].path[0] = uint32_t(k);
-        out[k].geometry = 0;
-        out[k].masks = {scene.instances[k].mask, 0xFFFFFFFFu};
-    }
-    return out;
+// The last description loaded: deciding whether a glTF instances its meshes loads it, and the command
+// then uses it.
+struct LoadedDescription {
+    std::string source;
+    SceneTransform transform;
+    std::shared_ptr<const InstancedScene> scene;
+};
+LoadedDescription& last_loaded() {
+    static LoadedDescription loaded;
+    return loaded;
 }
 
-size_t instance_count_of(const InstancedScene& scene) { return scene.instances.size(); }
-
-uint64_t estimate_instanced_scene_memory(const InstancedScene& scene, const TreeRecipe& recipe) {
-    uint64_t bytes = 0;
-    for (const Scene& mesh : scene.meshes)
-        bytes += estimate_build_memory(mesh.triangles.size(), recipe).bytes + 128 * mesh.triangles.size();
-    return bytes + 512 * scene.instances.size();
+std::shared_ptr<const InstancedScene> load_description(const std::string& source, const SceneTransform& transform) {
+    LoadedDescription& last = last_loaded();
+    const SceneTransform& t = last.transform;
+    if (last.scene && last.source == source && t.rotate_degrees == transform.rotate_degrees &&
+        t.scale == transform.scale && t.translate == transform.translate)
+        return last.scene;
+    last = {source, transform, std::make_shared<const InstancedScene>(load_instanced_scene(source, transform))};
+    return last.scene;
 }
 
 }  // namespace
 
-bool names_instanced_scene(const std::string& source) { return is_instanced_scene_spec(source); }
+bool names_instanced_scene(const std::string& source) {
+    if (source.starts_with("builtin:forest:")) return true;
+    if (!is_instanced_scene_spec(source)) return false;
+    try {
+        const std::shared_ptr<const InstancedScene> scene = load_description(source, SceneTransform{});
+        return scene->depth() > 1 || scene->placement_count() > scene->meshes.size();
+    } catch (const Error&) {
+        return false;  // the one-mesh reader says what is wrong with it
+    }
+}
 
 TracerConfig instanced_scene_kernel(const std::string& kernel) {
     const TracerConfig config = parse_kernel(kernel == "auto" ? "bvh8" : kernel);
@@ -56,29 +64,22 @@ size_t InstancedInput::KeyHash::operator()(const Key& key) const {
 }
 
 InstancedInput::InstancedInput(const std::string& source, const SceneTransform& transform) {
-    if (!transform.is_identity())
-        throw Error(source + ": --rotate, --scale and --translate transform one mesh; an instanced scene places its "
-                             "meshes itself");
-    description_ = load_instanced_scene(source);
-    name_ = description_.name;
-    arbiter_ = std::make_unique<SceneArbiter>(meshes(), placements_of(description_));
+    description_ = load_description(source, transform);
+    name_ = description_->name;
+    ScenePlacements placed = mesh_placements_of(*description_);
+    meshes_ = std::move(placed.meshes);
+    arbiter_ = std::make_unique<SceneArbiter>(meshes_, std::move(placed.placements));
     const std::vector<MeshPlacement>& all = arbiter_->placements();
     placement_of_.reserve(all.size());
     for (size_t p = 0; p < all.size(); ++p) placement_of_.emplace(Key{all[p].path, all[p].geometry}, uint32_t(p));
 }
 
-const std::vector<Scene>& InstancedInput::meshes() const { return description_.meshes; }
+size_t InstancedInput::instance_count() const { return description_->instances.size(); }
 
-size_t InstancedInput::instance_count() const { return instance_count_of(description_); }
-
-uint64_t InstancedInput::instanced_triangles() const {
-    uint64_t total = 0;
-    for (const MeshPlacement& p : placements()) total += meshes()[p.mesh].triangles.size();
-    return total;
-}
+uint64_t InstancedInput::instanced_triangles() const { return description_->instanced_triangle_count(); }
 
 uint64_t InstancedInput::memory_estimate(const TreeRecipe& recipe) const {
-    return estimate_instanced_scene_memory(description_, recipe);
+    return estimate_scene_memory(*description_, SceneConfig{recipe, TracerConfig{}}).total();
 }
 
 void InstancedInput::check_memory(const TreeRecipe& recipe) const {

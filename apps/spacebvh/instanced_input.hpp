@@ -14,12 +14,15 @@
 
 #include "spacebvh/recipe.hpp"
 #include "spacebvh/scene.hpp"
-#include "instanced_shim.hpp"  // TEMPORARY
+#include "spacebvh/tools/instanced_scene.hpp"
 #include "spacebvh/tools/scene_arbiter.hpp"
 
 namespace spacebvh::cli {
 
-// Whether `source` names an instanced scene rather than one mesh.
+// Whether `source` names an instanced scene rather than one mesh: builtin:forest:N, or a glTF file
+// whose nodes place a mesh more than once (or nest scenes). A glTF that places each mesh once stays
+// one mesh, as it always was (node transforms applied); so does one that does not load as a scene
+// (the one-mesh reader then reports what is wrong with it).
 bool names_instanced_scene(const std::string& source);
 
 // The tracer of a --kernel name on an instanced scene: "auto" is bvh8 for every ray kind; a packet
@@ -28,13 +31,14 @@ TracerConfig instanced_scene_kernel(const std::string& kernel);
 
 class InstancedInput {
 public:
-    // Loads the scene (throws Error naming the spec and what is wrong with it). `transform` must be
-    // the identity: the load-time transform options apply to one mesh.
+    // Loads the scene (throws Error naming the spec and what is wrong with it); `transform` (the
+    // load-time transform options) is composed onto every instance.
     InstancedInput(const std::string& source, const tools::SceneTransform& transform);
 
     const std::string& name() const { return name_; }
-    const std::vector<tools::Scene>& meshes() const;
-    size_t instance_count() const;         // instances at every level
+    // Every mesh placed: the scene's, then each nested scene's.
+    const std::vector<tools::Scene>& meshes() const { return meshes_; }
+    size_t instance_count() const;         // the scene's own instances (placements() counts every level's)
     uint64_t instanced_triangles() const;  // triangles over every placement
     const std::vector<tools::MeshPlacement>& placements() const { return arbiter_->placements(); }
     const tools::SceneArbiter& arbiter() const { return *arbiter_; }
@@ -60,7 +64,8 @@ public:
 
 private:
     std::string name_;
-    tools::InstancedScene description_;
+    std::shared_ptr<const tools::InstancedScene> description_;
+    std::vector<tools::Scene> meshes_;
     std::unique_ptr<tools::SceneArbiter> arbiter_;
     struct Key {
         std::array<uint32_t, kMaxInstanceLevels> path;

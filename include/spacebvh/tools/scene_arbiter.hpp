@@ -36,6 +36,17 @@ struct MeshPlacement {
     }
 };
 
+struct InstancedScene;
+
+// Every placement of a mesh in the RenderScene that make_render_scene builds of `scene`
+// (instanced_scene.hpp: instance k of a scene has id k there, and each mesh is geometry 0 of a scene
+// of its own), with the meshes they index: the top scene's, then each nested scene object's, once.
+struct ScenePlacements {
+    std::vector<Scene> meshes;
+    std::vector<MeshPlacement> placements;
+};
+ScenePlacements mesh_placements_of(const InstancedScene& scene);
+
 // The closest exact hit and the placement it is on (-1 for a miss).
 struct PlacedHit {
     HitRecord hit;

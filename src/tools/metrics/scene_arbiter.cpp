@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 #include "core/exact_triangle.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/tools/instanced_scene.hpp"
 #include "trace/scene/instance_transform.hpp"
 
 namespace spacebvh::tools {
@@ -69,7 +71,39 @@ double condition_number(const Affine& a) {
 // "Boxes of instances"); 1e-4 * cond * (|org| + reach) is some 400 times that.
 constexpr double kWorldPadding = 1e-4;
 
+// Walks `level` (reached by `prefix`), appending its meshes to `out` once per scene object.
+void collect_placements(const InstancedScene& level, const MeshPlacement& prefix, size_t depth,
+                        std::map<const InstancedScene*, uint32_t>& first_mesh, ScenePlacements& out) {
+    auto [found, added] = first_mesh.emplace(&level, uint32_t(out.meshes.size()));
+    if (added) out.meshes.insert(out.meshes.end(), level.meshes.begin(), level.meshes.end());
+    const uint32_t offset = found->second;
+    if (depth >= kMaxInstanceLevels) throw Error("scene '" + level.name + "': nested deeper than the scenes allow");
+    for (size_t k = 0; k < level.instances.size(); ++k) {
+        const SceneInstance& instance = level.instances[k];
+        MeshPlacement p = prefix;
+        p.transforms.push_back(instance.transform);
+        p.path[depth] = uint32_t(k);
+        p.masks.push_back(instance.mask);
+        if (instance.scene) {
+            collect_placements(*instance.scene, p, depth + 1, first_mesh, out);
+            continue;
+        }
+        p.mesh = offset + instance.mesh;
+        p.geometry = 0;
+        p.masks.push_back(0xFFFFFFFFu);  // the mesh's own, in its scene of its own
+        out.placements.push_back(std::move(p));
+    }
+}
+
 }  // namespace
+
+ScenePlacements mesh_placements_of(const InstancedScene& scene) {
+    ScenePlacements out;
+    std::map<const InstancedScene*, uint32_t> first_mesh;
+    out.placements.reserve(scene.instances.size());
+    collect_placements(scene, MeshPlacement{}, 0, first_mesh, out);
+    return out;
+}
 
 struct SceneArbiter::Impl {
     std::span<const Scene> meshes;
