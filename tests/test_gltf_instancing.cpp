@@ -228,8 +228,8 @@ TEST_F(GltfInstancing, BadGpuInstancingNamesTheAttribute) {
         {ext + R"({"attributes":{"TRANSLATION":1.5}}})", "accessor is not an index"},
         {ext + R"({"attributes":{"TRANSLATION":4}}})", "unexpected element type"},
         {ext + R"({"attributes":{"TRANSLATION":1,"SCALE":3}}})", "entries, but another attribute has"},
-        {ext + R"({"attributes":{"TRANSLATION":6}}})", "non-finite transform"},
-        {ext + R"({"attributes":{"ROTATION":7}}})", "rotation quaternion is zero"},
+        {ext + R"({"attributes":{"TRANSLATION":6}}})", "instance 0: non-finite transform"},
+        {ext + R"({"attributes":{"ROTATION":7}}})", "instance 0: rotation quaternion is zero"},
         {ext + R"({"attributes":{"ROTATION":2}}})", "unexpected element type"},
     };
     for (const auto& c : cases) {

@@ -24,8 +24,9 @@ TEST(Forest, SpecsAndSizeLimits) {
     EXPECT_TRUE(is_instanced_scene_spec("x.glb"));
     EXPECT_FALSE(is_instanced_scene_spec("builtin:organic"));
     EXPECT_FALSE(is_instanced_scene_spec("bunny.obj"));
-    for (const char* bad : {"builtin:forest:0", "builtin:forest:1000001", "builtin:forest:abc", "builtin:forest:-3",
-                            "builtin:forest:", "builtin:forest:12x", "builtin:forest:99999999999999999999999"}) {
+    for (const char* bad :
+         {"builtin:forest", "builtin:forest:0", "builtin:forest:1000001", "builtin:forest:abc", "builtin:forest:-3",
+          "builtin:forest:", "builtin:forest:12x", "builtin:forest:99999999999999999999999"}) {
         try {
             load_instanced_scene(bad);
             ADD_FAILURE() << bad << " loaded";
@@ -94,6 +95,43 @@ TEST(InstancedScene, ForestAnswersMatchTheArbiterPerPlacementAndFlattened) {
         const Check some = check_against_arbiter(*render, forest, rays, 0b101);
         EXPECT_EQ(some.wrong, 0u) << some.first;
         EXPECT_LT(some.hits, all.hits);
+    }
+}
+
+// The load transform is composed onto every instance (outer * instance, in double, rounded once).
+TEST(InstancedScene, TheLoadTransformPlacesEveryInstance) {
+    SceneTransform transform;
+    transform.rotate_degrees = {30.0f, -20.0f, 75.0f};
+    transform.scale = 2.5f;
+    transform.translate = {4.0f, -1.0f, 7.0f};
+    const InstancedScene plain = load_instanced_scene("builtin:forest:20");
+    const InstancedScene moved = load_instanced_scene("builtin:forest:20", transform);
+    ASSERT_EQ(moved.instances.size(), plain.instances.size());
+    EXPECT_NE(moved.name, plain.name);
+    for (size_t i = 0; i < plain.instances.size(); ++i) {
+        const Vec3 corner = plain.meshes[plain.instances[i].mesh].triangles[7].v1;
+        const Vec3 expected = transform.apply(plain.instances[i].transform.apply(corner));
+        const Vec3 got = moved.instances[i].transform.apply(corner);
+        EXPECT_LE(length(got - expected), 1e-5f * length(expected)) << i;
+    }
+    // A one-mesh spec is loaded by load_scene with the transform itself.
+    const InstancedScene one = load_instanced_scene("builtin:soup", transform);
+    EXPECT_EQ(one.meshes[0].name, load_scene("builtin:soup", transform).name);
+    SceneTransform bad;
+    bad.scale = 0.0f;
+    EXPECT_THROW(load_instanced_scene("builtin:forest:2", bad), Error);
+}
+
+TEST(Forest, LoadsFlattenedAsOneMeshWithinTheCap) {
+    const InstancedScene forest = load_instanced_scene("builtin:forest:3");
+    const Scene flat = load_scene("builtin:forest:3");
+    EXPECT_EQ(flat.triangles.size(), forest.instanced_triangle_count());
+    EXPECT_EQ(flat.name, "forest:3");
+    try {
+        load_scene("builtin:forest:100000");
+        ADD_FAILURE() << "flattened 10^9 triangles";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("more than the 50000000"), std::string::npos) << e.what();
     }
 }
 
@@ -193,6 +231,20 @@ TEST(SceneMemory, EstimateBoundsTheMeasuredSize) {
         EXPECT_GE(kept, measured) << builder;
         EXPECT_LE(kept, 3 * measured) << builder << ": " << format_bytes(kept) << " vs " << format_bytes(measured);
         EXPECT_GT(estimate.build_bytes, 0u);
+    }
+}
+
+TEST(SceneMemory, ABuildBeyondTheLimitIsRefusedBeforeItStarts) {
+    SceneConfig config;
+    config.recipe.limits.memory_limit_bytes = 4 << 20;
+    const InstancedScene forest = load_instanced_scene("builtin:forest:100");
+    try {
+        make_render_scene(forest, config);
+        ADD_FAILURE() << "built";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("instanced scene 'forest:100' (100 placements"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("the memory limit of 4.0 MiB"), std::string::npos) << e.what();
     }
 }
 

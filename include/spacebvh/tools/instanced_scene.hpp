@@ -2,7 +2,7 @@
 // Instanced scenes as the tools load them: a few triangle meshes, each stored once, placed many times
 // by affine transforms (builtin:forest:N, glTF 2.0 node hierarchies and EXT_mesh_gpu_instancing), and
 // the RenderScene that builds each mesh's tree once and instances it (docs/scenes.md, "Scene files").
-// The description is plain data: the memory it takes is the meshes' triangles plus about 80 bytes per
+// The description is plain data: the memory it takes is the meshes' triangles plus 80 bytes per
 // instance, so a million placements of a few meshes (10^10 instanced triangles) fit in a laptop.
 #pragma once
 
@@ -84,13 +84,16 @@ inline constexpr uint64_t kMaxForestInstances = 1'000'000;
 // all ones), instanced by the top scene with each instance's transform and mask; nested scenes become
 // nested RenderScenes (each nested scene object built once). The RenderScenes view the meshes'
 // triangles (refit reads them again): `scene` must outlive the result. The shared_ptr overload keeps
-// `scene` alive as long as the result.
+// `scene` alive as long as the result. Before building anything, refuses (Error "... needs about E
+// (estimate), more than ...") a scene whose estimate_scene_memory total exceeds
+// config.recipe.limits.memory_limit_bytes, or the memory available when that is 0.
 std::shared_ptr<RenderScene> make_render_scene(const InstancedScene& scene, const SceneConfig& config);
 std::shared_ptr<RenderScene> make_render_scene(std::shared_ptr<const InstancedScene> scene, const SceneConfig& config);
 
 // estimate_scene_memory (memory_estimate.hpp) for what make_render_scene(scene, config) builds: each
 // mesh that an instance places once (every nested scene object once), every instance, every top level.
-// The description itself (`scene`) is not counted.
+// The description itself (`scene`) is not counted. A front end prints total() and refuses before a
+// build with check_memory_estimate(what, total(), limit) (memory_estimate.hpp), as make_render_scene does.
 SceneMemoryEstimate estimate_scene_memory(const InstancedScene& scene, const SceneConfig& config);
 
 }  // namespace spacebvh::tools

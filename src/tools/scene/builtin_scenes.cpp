@@ -6,7 +6,11 @@
 //   organic           a closed, displaced cube-sphere (dense, smooth, uniform triangles)
 //   soup              large overlapping random triangles
 //   city:N            about N triangles of city blocks over huge ground triangles (city_scene.cpp)
+//   forest:N          builtin:forest:N's placements flattened into one mesh (an instanced scene first,
+//                     forest_scene.cpp and tools::load_instanced_scene)
 #include <numbers>
+
+#include "spacebvh/tools/instanced_scene.hpp"
 
 #include "tools/scene/scene_internal.hpp"
 
@@ -282,10 +286,13 @@ Scene make_builtin_scene(const std::string& name) {
         scene.triangles = make_soup();
     } else if (name.starts_with(kCityPrefix)) {
         scene.triangles = scene_detail::make_city(scene_detail::parse_city_size(name.substr(kCityPrefix.size())));
+    } else if (name.starts_with("forest")) {
+        // As one mesh: every placement's triangles in world space (within flatten_scene's cap).
+        scene.triangles = flatten_scene(load_instanced_scene("builtin:" + name)).triangles;
     } else {
         std::string valid;
         for (const std::string& known : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + known;
-        throw Error("unknown builtin scene '" + name + "' (valid: " + valid + ", city:N)");
+        throw Error("unknown builtin scene '" + name + "' (valid: " + valid + ", city:N, forest:N)");
     }
     scene.degenerate_count = scene_detail::count_degenerate(scene.triangles);
     return scene;

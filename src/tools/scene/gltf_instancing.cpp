@@ -64,6 +64,8 @@ private:
     }
 
     void add_instance(uint32_t mesh, const GltfMatrix& world, const std::string& where) {
+        if (scene_.instances.size() >= kMaxGltfInstances)
+            fail_at(path_, where, "more than " + std::to_string(kMaxGltfInstances) + " instances in one file");
         const Affine transform = Affine64::from_column_major(world).rounded();
         const std::string reason = invalid_instance_transform(transform);
         if (!reason.empty()) fail_at(path_, where, "transform " + reason);
@@ -108,7 +110,7 @@ private:
             if (!values[0].empty()) entry.translation.assign(&values[0][3 * i], &values[0][3 * i + 3]);
             if (!values[1].empty()) entry.rotation.assign(&values[1][4 * i], &values[1][4 * i + 4]);
             if (!values[2].empty()) entry.scale.assign(&values[2][3 * i], &values[2][3 * i + 3]);
-            out[i] = gltf_local_matrix(entry, int(i), path_ + ": " + where + " instance");
+            out[i] = gltf_local_matrix(entry, where + " instance " + std::to_string(i), path_);
         }
         return out;
     }

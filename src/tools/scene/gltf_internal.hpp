@@ -32,8 +32,13 @@ void read_gltf_model(std::string_view bytes, const std::string& path, tinygltf::
 
 GltfMatrix gltf_multiply(const GltfMatrix& a, const GltfMatrix& b);
 // A node's local transform: its matrix, or T * R * S (the quaternion normalised first). Throws Error
-// naming the node for a wrong number of entries, a zero or non-finite quaternion, non-finite values.
-GltfMatrix gltf_local_matrix(const tinygltf::Node& node, int node_index, const std::string& path);
+// naming `where` (the node) for a wrong number of entries, a zero or non-finite quaternion, non-finite
+// values.
+GltfMatrix gltf_local_matrix(const tinygltf::Node& node, const std::string& where, const std::string& path);
+
+// The most instances one glTF file may place (nodes and EXT_mesh_gpu_instancing entries together):
+// 16 times builtin:forest's largest, far beyond real files, and a few GB of description at most.
+inline constexpr uint64_t kMaxGltfInstances = 16'000'000;
 
 // Walks the nodes of the default scene (of every scene when there is no default) depth first, children
 // in listed order, calling visit(node index, node, world transform) with the transforms composed down

@@ -20,8 +20,7 @@ GltfMatrix gltf_multiply(const GltfMatrix& a, const GltfMatrix& b) {
     return r;
 }
 
-GltfMatrix gltf_local_matrix(const tinygltf::Node& node, int node_index, const std::string& path) {
-    const std::string where = "node " + std::to_string(node_index);
+GltfMatrix gltf_local_matrix(const tinygltf::Node& node, const std::string& where, const std::string& path) {
     if (node.matrix.size() == 16) {
         GltfMatrix m;
         std::copy(node.matrix.begin(), node.matrix.end(), m.begin());
@@ -106,7 +105,8 @@ void walk_gltf_nodes(const tinygltf::Model& model, const std::string& path, cons
                         "reached twice from " + where + ": glTF nodes must form a tree (a cycle, or two parents)");
             visited[node_index] = 1;
             const tinygltf::Node& node = model.nodes[node_index];
-            const GltfMatrix world = gltf_multiply(parent, gltf_local_matrix(node, node_index, path));
+            const GltfMatrix world =
+                gltf_multiply(parent, gltf_local_matrix(node, "node " + std::to_string(node_index), path));
             visit(node_index, node, world);
             // Reverse push so that children are visited in their listed order.
             for (auto child = node.children.rbegin(); child != node.children.rend(); ++child)

@@ -167,7 +167,7 @@ Scene flatten_scene(const InstancedScene& scene, uint64_t max_triangles) {
 }
 
 bool is_instanced_scene_spec(std::string_view spec) {
-    if (spec.starts_with(scene_detail::kForestPrefix)) return true;
+    if (spec.starts_with(scene_detail::kForestPrefix) || spec == "builtin:forest") return true;
     if (spec.starts_with("builtin:")) return false;
     const std::string extension = lower_extension(spec);
     return extension == ".gltf" || extension == ".glb";
@@ -176,9 +176,9 @@ bool is_instanced_scene_spec(std::string_view spec) {
 InstancedScene load_instanced_scene(std::string_view spec, const SceneTransform& transform) {
     if (const char* reason = transform.invalid_reason()) throw Error(std::string("scene transform: ") + reason);
     InstancedScene scene;
-    if (spec.starts_with(scene_detail::kForestPrefix)) {
-        scene =
-            scene_detail::make_forest(scene_detail::parse_forest_size(spec.substr(scene_detail::kForestPrefix.size())));
+    if (spec.starts_with(scene_detail::kForestPrefix) || spec == "builtin:forest") {
+        const size_t prefix = std::min(spec.size(), scene_detail::kForestPrefix.size());
+        scene = scene_detail::make_forest(scene_detail::parse_forest_size(spec.substr(prefix)));
     } else if (is_instanced_scene_spec(spec)) {
         scene = scene_detail::load_gltf_instanced(std::string(spec));
     } else {
@@ -200,6 +200,9 @@ InstancedScene load_instanced_scene(std::string_view spec, const SceneTransform&
 std::shared_ptr<RenderScene> make_render_scene(const InstancedScene& scene, const SceneConfig& config) {
     std::vector<const InstancedScene*> order;
     collect_scenes(scene, 0, order);
+    check_memory_estimate("instanced scene '" + scene.name + "' (" + std::to_string(scene.placement_count()) +
+                              " placements of " + std::to_string(scene.unique_triangle_count()) + " triangles)",
+                          estimate_scene_memory(scene, config).total(), config.recipe.limits.memory_limit_bytes);
     std::map<const InstancedScene*, std::shared_ptr<RenderScene>> built;
     for (const InstancedScene* level : order) {
         std::vector<std::shared_ptr<RenderScene>> meshes(level->meshes.size());
