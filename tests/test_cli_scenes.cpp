@@ -138,6 +138,13 @@ TEST_F(Cli, CompareAnInstancedSceneAgainstEmbreesTwoLevelScene) {
     EXPECT_EQ(embree_rows, 2u);
     EXPECT_GT(json["scenes"][0]["rays"]["diffuse"].get<int>(), 0);
     expect_clean_failure(std::string("compare ") + kForest + " --kernel packet16 --runs 1", {"packet16", "instanced"});
+    // Every row's scene is kept: the estimate of all of them is checked before the first build.
+    const CliResult r = run(std::string("compare ") + kForest +
+                            " --builders binned,spatial --kernel bvh8,bvh4 "
+                            "--memory-limit 60M --runs 1");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("4 times, the rows' scenes"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("memory limit"), std::string::npos) << r.output;
 }
 
 TEST_F(Cli, BadInstancedSpecsFailCleanly) {

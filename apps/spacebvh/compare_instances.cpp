@@ -107,7 +107,9 @@ void load_instanced_comparison(const ComparePlan& plan, SceneComparison& compari
         throw Error("--tree: " + comparison.source + " is an instanced scene; saved trees are one mesh's");
     comparison.instanced = std::make_unique<InstancedInput>(comparison.source, plan.transform);
     comparison.scene = comparison.instanced->world_box();  // for the camera
-    for (const BuilderSpec& builder : plan.builders) comparison.instanced->check_memory(builder.options);
+    std::vector<TreeRecipe> recipes;  // every row's scene is built and kept before the rays are traced
+    for (const BuilderSpec& builder : plan.builders) recipes.push_back(builder.options);
+    comparison.instanced->check_memory(recipes, plan.kernels.size());
 }
 
 void add_our_instanced_rows(const ComparePlan& plan, SceneComparison& comparison, Progress& progress) {

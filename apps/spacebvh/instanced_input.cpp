@@ -82,12 +82,17 @@ uint64_t InstancedInput::memory_estimate(const TreeRecipe& recipe) const {
     return estimate_scene_memory(*description_, SceneConfig{recipe, TracerConfig{}}).total();
 }
 
-void InstancedInput::check_memory(const TreeRecipe& recipe) const {
-    const uint64_t estimate = memory_estimate(recipe);
-    std::printf("memory estimate  %s to build %s (each mesh's tree once, the instances, the top levels)\n",
-                format_bytes(estimate).c_str(), name_.c_str());
+void InstancedInput::check_memory(const TreeRecipe& recipe) const { check_memory(std::span(&recipe, 1), 1); }
+
+void InstancedInput::check_memory(std::span<const TreeRecipe> recipes, size_t copies) const {
+    uint64_t estimate = 0;
+    for (const TreeRecipe& recipe : recipes) estimate += copies * memory_estimate(recipe);
+    const size_t scenes = recipes.size() * copies;
+    std::printf("memory estimate  %s to build %s%s (each mesh's tree once, the instances, the top levels)\n",
+                format_bytes(estimate).c_str(), name_.c_str(),
+                scenes > 1 ? (" " + std::to_string(scenes) + " times, the rows' scenes").c_str() : "");
     std::fflush(stdout);
-    check_memory_estimate("scene '" + name_ + "'", estimate, recipe.limits.memory_limit_bytes);
+    check_memory_estimate("scene '" + name_ + "'", estimate, recipes.front().limits.memory_limit_bytes);
 }
 
 std::shared_ptr<RenderScene> InstancedInput::build(const SceneConfig& config) const {

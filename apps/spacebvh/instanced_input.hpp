@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -49,6 +50,9 @@ public:
     uint64_t memory_estimate(const TreeRecipe& recipe) const;
     // Prints the estimate and throws Error when it is over --memory-limit (or the memory available).
     void check_memory(const TreeRecipe& recipe) const;
+    // The same for several scenes kept at once (compare's rows: one per recipe, `copies` of each),
+    // against the first recipe's limit.
+    void check_memory(std::span<const TreeRecipe> recipes, size_t copies) const;
     // Builds the RenderScene: every mesh's tree once with `config.recipe`, traced by `config.tracer`.
     std::shared_ptr<RenderScene> build(const SceneConfig& config) const;
 
