@@ -2,12 +2,14 @@
 // Instanced scenes, ours against Embree HIGH's two-level scene (instance geometries over one mesh
 // scene), on the same rays, in one process: N instances of one mesh placed by deterministic random
 // rotations, mirrors and non-uniform scales. Prints, side by side with ratios (medians of RUNS):
-// top-level build times; closest-hit and occlusion times on random and primary rays (ours with each
+// top-level build times; closest-hit and occlusion times on random, primary and diffuse rays (ours with each
 // single-ray kernel, Embree rtcIntersect1/rtcOccluded1) with every answer checked against Embree's
 // (disagreements counted, not settled: instanced answers may differ at instance seams); the same
 // scene flattened into one spatial-split mesh where it fits; and the mesh's refit against its build.
 // Speeds are measurements, never asserted (bench/README.md).
-// Usage: spacebvh_scenes_bench SCENE INSTANCES RAYS [RUNS]   (SCENE: a file or builtin:NAME)
+// Diffuse rays bounce once from the primary hits. With MAX_TOP (>= 1000), top-level build times for
+// 10^3 .. MAX_TOP instances follow.
+// Usage: spacebvh_scenes_bench SCENE INSTANCES RAYS [RUNS [MAX_TOP]]   (SCENE: a file or builtin:NAME)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,6 +30,10 @@
 using namespace spacebvh;
 
 namespace {
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
 
 double median_ms(int runs, const std::function<void()>& work) {
     std::vector<double> ms;
@@ -116,8 +122,10 @@ size_t disagreements(std::span<const Ray> rays, std::span<const float> a, std::s
 
 // The same scene as one mesh (each instance's triangles taken to world space), built by the spatial
 // builder and traced by bvh8, against the two-level scene's bvh8 times, where it fits.
-void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, const std::vector<Ray>& random,
-               const std::vector<Ray>& primary, const std::vector<double>& two_level_ms, int runs) {
+using RayKinds = std::vector<std::pair<const char*, const std::vector<Ray>*>>;
+
+void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, const RayKinds& kinds,
+               const std::vector<double>& two_level_ms, int runs) {
     const size_t triangles = placed.size() * mesh.triangles.size();
     if (triangles > 4'000'000) {
         std::printf("flattened: %zu triangles, not built (over 4M)\n", triangles);
@@ -138,7 +146,7 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
         "| flattened/two-level | Embree flattened ms | Embree flattened/ours flattened |\n",
         triangles, build_ms);
     size_t k = 0;
-    for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
+    for (const auto& [kind, rays] : kinds)
         for (bool occlusion : {false, true}) {
             std::vector<Hit> hits(rays->size());
             std::vector<uint8_t> blocked(rays->size());
@@ -160,16 +168,93 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
         }
 }
 
+// The two-level scene: `leaf` placed by each transform (instance id k is placed[k]).
+std::unique_ptr<RenderScene> instanced(const SceneConfig& config, const std::shared_ptr<RenderScene>& leaf,
+                                       const std::vector<Affine>& placed) {
+    auto top = std::make_unique<RenderScene>(config, "instances");
+    for (const Affine& a : placed) top->attach_instance(leaf, a);
+    top->commit();
+    return top;
+}
+
+// One diffuse bounce per primary hit (docs/rays.md), from the hit triangle taken to world space.
+std::vector<Ray> diffuse_rays(const RenderScene& scene, const tools::Scene& mesh, const std::vector<Affine>& placed,
+                              const std::vector<Ray>& primary, float diagonal) {
+    std::vector<SceneHit> hits(primary.size());
+    scene.intersect(primary, hits);
+    tools::Scene at;  // one world triangle per hit
+    std::vector<Ray> from;
+    std::vector<Hit> hit;
+    for (size_t i = 0; i < primary.size(); ++i) {
+        if (!hits[i].is_hit()) continue;
+        const Affine& a = placed[hits[i].instance[0]];
+        const Triangle& t = mesh.triangles[hits[i].primitive];
+        at.triangles.push_back({a.apply(t.v0), a.apply(t.v1), a.apply(t.v2)});
+        from.push_back(primary[i]);
+        hit.push_back({hits[i].t, uint32_t(at.triangles.size() - 1), hits[i].u, hits[i].v});
+    }
+    return tools::generate_diffuse_rays(at, from, hit, 7, 1e-4f * diagonal);
+}
+
+// The mesh alone, ours (spatial tree, bvh8) against Embree HIGH on random rays in its box: the
+// single-mesh ratio the instanced cells are held to.
+void single_mesh(const tools::Scene& mesh, const tools::EmbreeScene& embree_mesh, size_t ray_count, int runs) {
+    const Bvh bvh = build(mesh.mesh(), TreeRecipe::for_builder("spatial"));
+    const Tracer tracer(mesh.mesh(), bvh, Kernel::bvh8);
+    const std::vector<Ray> rays = tools::generate_random_rays(bounds_of(mesh.triangles), ray_count, 2);
+    std::vector<Hit> hits(rays.size());
+    std::vector<uint8_t> blocked(rays.size());
+    for (bool occlusion : {false, true}) {
+        const double ours = median_ms(runs, [&] {
+            if (occlusion)
+                tracer.occluded(rays, blocked);
+            else
+                tracer.intersect(rays, hits);
+        });
+        const double theirs = median_ms(runs, [&] {
+            if (occlusion)
+                embree_mesh.occluded(rays, blocked);
+            else
+                embree_mesh.intersect(rays, hits);
+        });
+        std::printf("single mesh, random %s, bvh8: ours %.1f ms, Embree %.1f ms, Embree/ours %.2f\n",
+                    occlusion ? "occluded" : "closest", ours, theirs, theirs / ours);
+    }
+}
+
+// Top-level build (attach and commit) of 10^3 .. max instances of `leaf`, ours against Embree's
+// commit of as many instance geometries.
+void top_level_scaling(const SceneConfig& config, const std::shared_ptr<RenderScene>& leaf,
+                       const std::shared_ptr<const tools::EmbreeScene>& embree_mesh, size_t max,
+                       float diagonal) {  // of the mesh
+    std::printf(
+        "| instances | ours attach ms | ours commit ms | Embree commit ms | ours commit/Embree | ours all/Embree |\n");
+    for (size_t count = 1000; count <= max; count *= 10) {
+        const std::vector<Affine> placed = placements(count, 1.5f * diagonal);
+        auto start = std::chrono::steady_clock::now();
+        RenderScene ours(config, "instances");
+        for (const Affine& a : placed) ours.attach_instance(leaf, a);
+        const double attach_ms = ms_since(start);
+        start = std::chrono::steady_clock::now();
+        ours.commit();
+        const double commit_ms = ms_since(start);
+        const double embree_ms = embree_instances(embree_mesh, placed)->top_build_milliseconds();
+        std::printf("| %zu | %.1f | %.1f | %.1f | %.2f | %.2f |\n", count, attach_ms, commit_ms, embree_ms,
+                    commit_ms / embree_ms, (attach_ms + commit_ms) / embree_ms);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
     if (argc < 4) {
-        std::fprintf(stderr, "usage: %s SCENE INSTANCES RAYS [RUNS]\n", argv[0]);
+        std::fprintf(stderr, "usage: %s SCENE INSTANCES RAYS [RUNS [MAX_TOP]]\n", argv[0]);
         return 2;
     }
     const tools::Scene mesh = tools::load_scene(argv[1]);
     const size_t instances = std::stoul(argv[2]), ray_count = std::stoul(argv[3]);
     const int runs = argc > 4 ? std::stoi(argv[4]) : 5;
+    const size_t max_top = argc > 5 ? std::stoul(argv[5]) : 0;
     const std::vector<Affine> placed = placements(instances, 1.5f * mesh.diagonal());
     std::printf("%s: %zu triangles, %zu instances (%.3g instanced triangles), %zu rays, median of %d runs\n",
                 mesh.name.c_str(), mesh.triangles.size(), instances, double(instances) * double(mesh.triangles.size()),
@@ -191,12 +276,7 @@ int main(int argc, char** argv) try {
     std::sort(embree_commit_ms.begin(), embree_commit_ms.end());
     const double embree_top_ms = embree_commit_ms[embree_commit_ms.size() / 2];
     std::unique_ptr<RenderScene> ours;
-    const double ours_top_ms = median_ms(runs, [&] {
-        ours.reset();
-        ours = std::make_unique<RenderScene>(config, "instances");
-        for (const Affine& a : placed) ours->attach_instance(leaf, a);
-        ours->commit();
-    });
+    const double ours_top_ms = median_ms(runs, [&] { ours = instanced(config, leaf, placed); });
     std::printf("top level (attach + commit): ours %.2f ms, Embree %.2f ms (commit only), ours/Embree %.2f\n",
                 ours_top_ms, embree_top_ms, ours_top_ms / embree_top_ms);
 
@@ -207,22 +287,27 @@ int main(int argc, char** argv) try {
     const std::vector<Ray> random = tools::generate_random_rays(world, ray_count, 1);
     const uint32_t side = uint32_t(std::sqrt(double(ray_count)));
     const std::vector<Ray> primary = tools::generate_primary_rays(tools::default_camera(box_scene), side, side);
+    const std::vector<Ray> diffuse = diffuse_rays(*ours, mesh, placed, primary, diagonal);
+    const RayKinds kinds = {{"random", &random}, {"primary", &primary}, {"diffuse", &diffuse}};
+    std::printf("diffuse: %zu rays (one per primary hit)\n", diffuse.size());
+    // One two-level scene per kernel, built once.
+    std::vector<std::pair<Kernel, std::unique_ptr<RenderScene>>> traced;
+    for (Kernel kernel : {Kernel::binary, Kernel::bvh4, Kernel::bvh8}) {
+        SceneConfig c = config;
+        c.tracer.kernel = kernel;
+        auto kleaf = std::make_shared<RenderScene>(c, "mesh");
+        kleaf->attach_mesh(mesh.mesh());
+        kleaf->commit();
+        traced.emplace_back(kernel, instanced(c, kleaf, placed));
+    }
     std::printf("| rays | query | kernel | ours ms | Embree ms | Embree/ours | disagreements |\n");
     std::vector<double> bvh8_ms;  // per ray kind and query, in the loop's order
-    for (const auto& [kind, rays] : {std::pair{"random", &random}, std::pair{"primary", &primary}})
+    for (const auto& [kind, rays] : kinds)
         for (bool occlusion : {false, true}) {
             std::vector<float> theirs(rays->size()), mine(rays->size());
             const double embree_ms = median_ms(runs, [&] { trace_t(*embree, *rays, theirs, occlusion); });
-            for (Kernel kernel : {Kernel::binary, Kernel::bvh4, Kernel::bvh8}) {
-                SceneConfig traced = config;
-                traced.tracer.kernel = kernel;
-                auto kleaf = std::make_shared<RenderScene>(traced, "mesh");
-                kleaf->attach_mesh(mesh.mesh());
-                kleaf->commit();
-                RenderScene top(traced, "instances");
-                for (const Affine& a : placed) top.attach_instance(kleaf, a);
-                top.commit();
-                const double ours_ms = median_ms(runs, [&] { trace_t(top, *rays, mine, occlusion); });
+            for (const auto& [kernel, top] : traced) {
+                const double ours_ms = median_ms(runs, [&] { trace_t(*top, *rays, mine, occlusion); });
                 if (kernel == Kernel::bvh8) bvh8_ms.push_back(ours_ms);
                 std::printf("| %s | %s | %s | %.1f | %.1f | %.2f | %zu |\n", kind, occlusion ? "occluded" : "closest",
                             to_string(kernel), ours_ms, embree_ms, embree_ms / ours_ms,
@@ -230,7 +315,9 @@ int main(int argc, char** argv) try {
             }
         }
 
-    flattened(mesh, placed, random, primary, bvh8_ms, runs);
+    single_mesh(mesh, *embree_mesh, ray_count, runs);
+    flattened(mesh, placed, kinds, bvh8_ms, runs);
+    if (max_top >= 1000) top_level_scaling(config, leaf, embree_mesh, max_top, mesh.diagonal());
 
     // Refit: the mesh's tree after its vertices moved (here: none moved, the cost is the same), against
     // building it again.

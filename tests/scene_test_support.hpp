@@ -14,9 +14,17 @@
 #include "core/exact_triangle.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tools/verify.hpp"
+#include "test_support.hpp"
 #include "trace/scene/instance_transform.hpp"
 
 namespace spacebvh::scene_testing {
+
+// The first `count` triangles of the built-in organic mesh.
+inline std::vector<Triangle> organic(size_t count) {
+    std::vector<Triangle> t = testing_support::cached_builtin_scene("organic").triangles;
+    t.resize(std::min(count, t.size()));
+    return t;
+}
 
 struct Level;
 struct MeshPart {

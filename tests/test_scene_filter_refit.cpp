@@ -17,12 +17,6 @@ using namespace spacebvh::scene_testing;
 
 namespace {
 
-std::vector<Triangle> organic(size_t count) {
-    std::vector<Triangle> t = testing_support::cached_builtin_scene("organic").triangles;
-    t.resize(std::min(count, t.size()));
-    return t;
-}
-
 Affine turned(float degrees, float sx, Vec3 shift, bool mirror) {
     const double c = std::cos(degrees * M_PI / 180.0), s = std::sin(degrees * M_PI / 180.0);
     Affine a;

@@ -9,6 +9,7 @@
 #include "spacebvh/tools/make_tree.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
+#include "spacebvh/scene_file.hpp"
 #include "spacebvh/tree_file.hpp"
 #include "tree_option.hpp"
 
@@ -121,15 +122,12 @@ nlohmann::json build_json(const BuildOptions& options, const BuiltTree& built, c
 // An instanced scene: its RenderScene built (each mesh's tree once, then the top levels) after the
 // memory estimate is printed and checked against the limit.
 void build_instances(const BuildOptions& options, const TreeRecipe& recipe) {
-    if (!options.save_path.empty())
-        throw Error("--save: " + options.source +
-                    " is an instanced scene; tree files hold one mesh's tree (a scene's tree file is not wired to "
-                    "the command line yet)");
     const InstancedInput input(options.source, options.scene.transform());
     input.check_memory(recipe);
     const auto start = std::chrono::steady_clock::now();
     const std::shared_ptr<RenderScene> scene = input.build(SceneConfig{recipe, TracerConfig{}});
     const double build_ms = milliseconds_since(start);
+    if (!options.save_path.empty()) save_render_scene(options.save_path, *scene, build_settings_text(recipe));
     const size_t peak = peak_rss_bytes();
     const uint64_t estimate = input.memory_estimate(recipe);
     std::printf("scene            %s (instanced: %zu meshes, %zu instances, %llu instanced triangles)\n",
@@ -146,16 +144,19 @@ void build_instances(const BuildOptions& options, const TreeRecipe& recipe) {
         scene->memory_bytes());
     std::printf("peak memory      %.1f MiB (resident, whole process); the build's estimate %.1f MiB\n",
                 double(peak) / 1048576.0, double(estimate) / 1048576.0);
-    write_json(options.common.json_path, {{"scene", input.name()},
-                                          {"triangles", input.instanced_triangles()},
-                                          {"meshes", input.meshes().size()},
-                                          {"instances", input.instance_count()},
-                                          {"builder", builder},
-                                          {"threads", options.common.effective_threads()},
-                                          {"build_ms", build_ms},
-                                          {"bytes", scene->memory_bytes()},
-                                          {"peak_rss_bytes", peak},
-                                          {"estimated_build_bytes", estimate}});
+    if (!options.save_path.empty()) std::printf("saved            %s (a scene file)\n", options.save_path.c_str());
+    nlohmann::json json = {{"scene", input.name()},
+                           {"triangles", input.instanced_triangles()},
+                           {"meshes", input.meshes().size()},
+                           {"instances", input.instance_count()},
+                           {"builder", builder},
+                           {"threads", options.common.effective_threads()},
+                           {"build_ms", build_ms},
+                           {"bytes", scene->memory_bytes()},
+                           {"peak_rss_bytes", peak},
+                           {"estimated_build_bytes", estimate}};
+    if (!options.save_path.empty()) json["saved"] = options.save_path;
+    write_json(options.common.json_path, json);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "spacebvh/bvh.hpp"
@@ -179,6 +180,13 @@ const char* to_string(Preset preset);  // "spatial"
 // if deeper). Deterministic for any thread count; throws Cancelled (tree unchanged) when cancelled.
 // Appends "+opt" to bvh.builder when it ran (iterations > 0).
 void optimize(Bvh& bvh, const ReinsertionConfig& reinsertion, uint32_t max_depth = 64, const BuildHooks& hooks = {});
+
+// A tree's boxes recomputed bottom-up after its triangles moved (same triangles, same count): the
+// shape, leaves and references stay; a leaf's box becomes the union of its triangles' whole boxes (a
+// reference that spatial splits clipped gets its triangle's whole box back, so such leaves overlap
+// more than the build chose). Nodes must be in depth-first order (children after their parent), as
+// every builder and tree file gives them. Throws Error when a leaf names a triangle out of range.
+void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles);
 
 // The termination-aware reinsertion (TerminationConfig::reinsertion_iterations, priced by its
 // segments) of any binary tree, as build() runs it after the build; segments may come from tracing

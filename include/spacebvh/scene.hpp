@@ -128,6 +128,7 @@ public:
     struct Impl;
 
 private:
+    friend struct SceneFileAccess;  // scene files (spacebvh/scene_file.hpp) save and restore the parts
     std::unique_ptr<Impl> impl_;
 };
 

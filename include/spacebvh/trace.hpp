@@ -128,6 +128,14 @@ public:
     void intersect(std::span<const Ray> rays, std::span<Hit> hits, TraversalStats* stats = nullptr) const;
     void occluded(std::span<const Ray> rays, std::span<uint8_t> occluded, TraversalStats* stats = nullptr) const;
 
+    // After the mesh's vertices moved (same triangles, same count) and `bvh`, the tree this tracer was
+    // made from, had its boxes recomputed for them (same topology): the 4- and 8-wide layouts with float
+    // nodes are updated in place (vertices and boxes read again, nodes and leaf packing kept), the
+    // others made again from `bvh`, as is any layout where a triangle became or stopped being
+    // degenerate. Answers are then exact for the moved mesh. Returns whether it was done in place.
+    // Throws Error as the constructor does for a tree that does not belong to the mesh.
+    bool refit(const MeshView& mesh, const Bvh& bvh);
+
     size_t memory_bytes() const;  // nodes + leaf triangle data
     size_t node_count() const;    // nodes of the layout
     std::string name() const;  // the kernel as the registry spells it: "bvh8-avx2", "bvh8-avx2+moller", "bvh8q-avx2",

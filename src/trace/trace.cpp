@@ -151,6 +151,17 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
     impl_->config = config;
 }
 
+bool Tracer::refit(const MeshView& mesh, const Bvh& bvh) {
+    const TriangleStore store(mesh);
+    check_belongs(store.triangles(), bvh);
+    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl_->layout))
+        if (trace::refit_wide(*wide4, store.triangles(), bvh)) return true;
+    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl_->layout))
+        if (trace::refit_wide(*wide8, store.triangles(), bvh)) return true;
+    *this = Tracer(mesh, bvh, impl_->config);
+    return false;
+}
+
 Tracer::~Tracer() = default;
 Tracer::Tracer(Tracer&&) noexcept = default;
 Tracer& Tracer::operator=(Tracer&&) noexcept = default;

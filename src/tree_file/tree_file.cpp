@@ -14,44 +14,14 @@
 #include <sstream>
 #include <type_traits>
 
+#include "tree_file/file_bytes.hpp"
 #include "tree_file/tree_file_checksum.hpp"
 #include "spacebvh/error.hpp"
 
 namespace spacebvh {
 namespace {
 
-// ---------------------------------------------------------------------------------------------------
-// Little-endian fields, whatever the host's byte order.
-
-constexpr bool kLittleHost = std::endian::native == std::endian::little;
-static_assert(kLittleHost || std::endian::native == std::endian::big, "mixed-endian hosts are not supported");
-
-constexpr uint64_t byte_swap(uint64_t x) {
-    uint64_t y = 0;
-    for (int i = 0; i < 8; ++i) y |= ((x >> (8 * i)) & 0xFF) << (8 * (7 - i));
-    return y;
-}
-constexpr uint32_t byte_swap(uint32_t x) { return uint32_t(byte_swap(uint64_t(x)) >> 32); }
-
-template <class T>
-T load_le(const std::byte* p) {
-    T value;
-    std::memcpy(&value, p, sizeof value);
-    if constexpr (!kLittleHost) value = byte_swap(value);
-    return value;
-}
-template <class T>
-void store_le(std::byte* p, T value) {
-    if constexpr (!kLittleHost) value = byte_swap(value);
-    std::memcpy(p, &value, sizeof value);
-}
-// memcpy of zero bytes is still undefined when a pointer is null, as an empty vector's or string's
-// data() may be (a tree without primitives, a builder without settings).
-void copy_bytes(void* to, const void* from, size_t count) {
-    if (count != 0) std::memcpy(to, from, count);
-}
-float load_f32(const std::byte* p) { return std::bit_cast<float>(load_le<uint32_t>(p)); }
-void store_f32(std::byte* p, float value) { store_le(p, std::bit_cast<uint32_t>(value)); }
+using namespace tree_file_detail;
 
 // ---------------------------------------------------------------------------------------------------
 // The 64-bit hash behind the checksum and the geometry hash. Four lanes take the input's 64-bit words
@@ -126,8 +96,6 @@ enum : size_t {
     kAtSettingsLength = 92,
 };
 
-constexpr uint64_t pad8(uint64_t n) { return (n + 7) & ~uint64_t(7); }
-
 // Where each section starts; every count is below 2^32, so no sum overflows.
 struct Layout {
     uint64_t text, nodes, primitives, checksum, size;
@@ -161,12 +129,6 @@ BvhNode load_node(const std::byte* p) {
     node.first = load_le<uint32_t>(p + 24);
     node.reference_count = load_le<uint32_t>(p + 28);
     return node;
-}
-
-std::string hex(uint64_t value) {
-    char text[24];
-    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
-    return text;
 }
 
 bool box_is_valid(const AABB& box) {
@@ -439,33 +401,12 @@ Bvh deserialize_bvh(std::span<const std::byte> bytes, std::span<const Triangle> 
     return bvh;
 }
 
-namespace {
-struct FileCloser {
-    void operator()(std::FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<std::FILE, FileCloser>;
-}  // namespace
-
 void save_bvh(const std::string& path, const Bvh& bvh, std::span<const Triangle> triangles, std::string_view settings) {
-    const std::vector<std::byte> bytes = serialize_bvh(bvh, triangles, settings);
-    File file(std::fopen(path.c_str(), "wb"));
-    if (!file) throw Error(path + ": cannot open for writing (" + std::strerror(errno) + ")");
-    const bool written = std::fwrite(bytes.data(), 1, bytes.size(), file.get()) == bytes.size();
-    if (!written || std::fclose(file.release()) != 0)
-        throw Error(path + ": write failed (" + std::strerror(errno) + ")");
+    tree_file_detail::write_file(path, serialize_bvh(bvh, triangles, settings));
 }
 
 Bvh load_bvh(const std::string& path, std::span<const Triangle> triangles, TreeFileInfo* info) {
-    std::error_code error;
-    if (std::filesystem::is_directory(path, error)) throw Error(path + ": is a directory, not a tree file");
-    File file(std::fopen(path.c_str(), "rb"));
-    if (!file) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
-    if (std::fseek(file.get(), 0, SEEK_END) != 0) throw Error(path + ": cannot determine the file size");
-    const long end = std::ftell(file.get());
-    if (end < 0 || std::fseek(file.get(), 0, SEEK_SET) != 0) throw Error(path + ": cannot determine the file size");
-    std::vector<std::byte> bytes(static_cast<size_t>(end));
-    if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
-        throw Error(path + ": read error (" + std::strerror(errno) + ")");
+    const std::vector<std::byte> bytes = tree_file_detail::read_file(path, "tree file");
     return deserialize_bvh(bytes, triangles, path, info);
 }
 

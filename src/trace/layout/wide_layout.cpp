@@ -32,7 +32,7 @@ WideNode<W> empty_node() {
 // rays too. Occlusion rays test fewer child boxes than in the collapse's own order; mostly free rays
 // and closest hits do the same work (closest hits only see slot order when distances tie).
 template <int W>
-void order_slots_by_size(WideNode<W>& node, const uint64_t (&lanes)[W]) {
+void order_slots_by_size(WideNode<W>& node, const uint64_t (&lanes)[W], uint32_t* source) {
     int order[W];
     for (int slot = 0; slot < W; ++slot) order[slot] = slot;
     std::stable_sort(order, order + W, [&](int a, int b) {
@@ -40,10 +40,13 @@ void order_slots_by_size(WideNode<W>& node, const uint64_t (&lanes)[W]) {
         return lanes[a] > lanes[b];
     });
     const WideNode<W> old = node;
+    uint32_t old_source[W];
+    std::copy(source, source + W, old_source);
     for (int slot = 0; slot < W; ++slot) {
         for (int plane = 0; plane < 6; ++plane) node.planes[plane][slot] = old.planes[plane][order[slot]];
         node.child[slot] = old.child[order[slot]];
         node.count[slot] = old.count[order[slot]];
+        source[slot] = old_source[order[slot]];
     }
 }
 
@@ -68,6 +71,7 @@ public:
         const std::vector<CollapseSlot> children = plan_.slots(bvh_index);
         const uint32_t index = uint32_t(layout_.nodes.size());
         layout_.nodes.push_back(empty_node<W>());
+        layout_.source.resize(layout_.source.size() + W, kInvalidIndex);
         uint64_t lanes[W] = {};
         // Leaves first, so the leaves of one node share packs (LeafPacker), then the subtrees.
         for (int slot = 0; slot < int(children.size()); ++slot) {
@@ -77,6 +81,7 @@ public:
                                             ? packer_.add(child)
                                             : packer_.add(subtree_triangles(triangles_, bvh_, children[slot].node));
             set_child(layout_.nodes[index], slot, count ? child.bounds : AABB::empty(), first, count);
+            if (count) layout_.source[size_t(index) * W + slot] = children[slot].node;
             lanes[slot] = count;
         }
         for (int slot = 0; slot < int(children.size()); ++slot) {
@@ -84,9 +89,10 @@ public:
             // Recursion depth is the tree depth, which build options cap at 1024.
             const MadeNode inner = make_node(children[slot].node);
             set_child(layout_.nodes[index], slot, bvh_.nodes[children[slot].node].bounds, inner.index, 0);
+            layout_.source[size_t(index) * W + slot] = children[slot].node;
             lanes[slot] = inner.lanes;
         }
-        order_slots_by_size(layout_.nodes[index], lanes);
+        order_slots_by_size(layout_.nodes[index], lanes, layout_.source.data() + size_t(index) * W);
         uint64_t total = 0;
         for (uint64_t slot_lanes : lanes) total += slot_lanes;
         return {index, total};
@@ -110,6 +116,7 @@ WideLayout<W> collapse_to_wide(std::span<const Triangle> triangles, const Bvh& b
         return layout;
     }
     layout.nodes.reserve(bvh.nodes.size() / (W - 1) + 1);
+    layout.source.reserve((bvh.nodes.size() / (W - 1) + 1) * W);
     layout.packs.reserve(bvh.primitives.size() / 4 + 1);
     Collapser<W>(triangles, bvh, layout, collapse).make_node(0);
     return layout;

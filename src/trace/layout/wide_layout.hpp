@@ -38,6 +38,10 @@ struct WideLayout {
     std::vector<WideNode<W>, HugePageAllocator<WideNode<W>>> nodes;  // nodes[0] is the root
     TrianglePacks packs;
     PackPlanesList planes;  // the moller leaf test's normals, planes[i] for packs[i]; empty without it
+    // W per node: the binary node whose box slot `slot` of node n holds, source[n * W + slot]
+    // (kInvalidIndex for an unused slot or a leaf of degenerate triangles). Refit reads the boxes
+    // again from there.
+    std::vector<uint32_t> source;
 };
 
 // Collapses the binary tree into wide nodes, choosing each node's children by `collapse`
@@ -46,7 +50,17 @@ struct WideLayout {
 template <int W>
 WideLayout<W> collapse_to_wide(std::span<const Triangle> triangles, const Bvh& bvh, WideCollapse collapse);
 
+// The layout made for `bvh` updated in place for the same tree with its boxes refitted to moved
+// `triangles` (same count, same topology, refit_boxes): the packs' vertices, the moller planes and
+// every slot's box are read again; nodes, packing and slot order stay. Returns false, changing
+// nothing, when a triangle's degeneracy changed (layouts store exactly the non-degenerate ones) or the
+// layout has no sources: then it must be made anew.
+template <int W>
+bool refit_wide(WideLayout<W>& layout, std::span<const Triangle> triangles, const Bvh& bvh);
+
 extern template WideLayout<4> collapse_to_wide<4>(std::span<const Triangle>, const Bvh&, WideCollapse);
 extern template WideLayout<8> collapse_to_wide<8>(std::span<const Triangle>, const Bvh&, WideCollapse);
+extern template bool refit_wide<4>(WideLayout<4>&, std::span<const Triangle>, const Bvh&);
+extern template bool refit_wide<8>(WideLayout<8>&, std::span<const Triangle>, const Bvh&);
 
 }  // namespace spacebvh::trace

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <string>
 
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "trace/scene/scene_impl.hpp"
 
@@ -86,11 +87,16 @@ uint32_t RenderScene::attach_mesh(const MeshView& mesh, const TreeRecipe& recipe
     record.triangles.assign(store.triangles().begin(), store.triangles().end());
     if (record.triangles.empty()) throw Error(record.view.name() + ": no triangles");
     record.bvh = build(record.view, recipe);
+    return impl_->add_mesh(std::move(record), mask);
+}
+
+uint32_t RenderScene::Impl::add_mesh(MeshRecord record, uint32_t mask) {
+    const uint32_t id = next_id(geometries, name);
     record.duplicates = record.bvh.primitives.size() > record.triangles.size();
     record.extent = scene::extent_of(record.bvh.root().bounds);
-    record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, impl_->config.tracer);
-    impl_->geometries.push_back({mask, std::move(record)});
-    impl_->committed = false;
+    record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, config.tracer);
+    geometries.push_back({mask, std::move(record)});
+    committed = false;
     return id;
 }
 
@@ -127,14 +133,10 @@ void RenderScene::detach(uint32_t id) {
 
 void RenderScene::set_mask(uint32_t id, uint32_t mask) { impl_->geometry(id).mask = mask; }
 
-void RenderScene::commit() {
-    Impl& s = *impl_;
-    s.check_unshared("commit");
-    std::vector<uint32_t> ids;
-    std::vector<scene::TopLevelItem> items;
-    uint32_t depth = 0;
-    for (uint32_t id = 0; id < s.geometries.size(); ++id) {
-        Geometry& g = s.geometries[id];
+void RenderScene::Impl::gather(std::vector<uint32_t>& ids, std::vector<scene::TopLevelItem>& items, uint32_t& depth) {
+    depth = 0;
+    for (uint32_t id = 0; id < geometries.size(); ++id) {
+        Geometry& g = geometries[id];
         if (!g.alive()) continue;
         if (InstanceRecord* inst = std::get_if<InstanceRecord>(&g.what)) {
             // The child's box as it is now (it may have been refitted since it was attached).
@@ -144,38 +146,51 @@ void RenderScene::commit() {
             depth = std::max(depth, c.depth + 1);
         }
         ids.push_back(id);
-        items.push_back(s.item_of(g));
+        items.push_back(item_of(g));
     }
-    if (ids.empty()) throw Error("scene '" + s.name + "': nothing to commit (no geometry attached)");
+    if (ids.empty()) throw Error("scene '" + name + "': nothing to commit (no geometry attached)");
+}
+
+void RenderScene::Impl::install(scene::TopLevel built, std::vector<uint32_t> ids,
+                                std::vector<scene::TopLevelItem> top_items, uint32_t top_depth) {
+    wide = scene::collapse_top_level(built.bvh);
+    top = std::move(built);
+    item_ids = std::move(ids);
+    items = std::move(top_items);
+    bounds = top.bvh.root().bounds;
+    root_padding = top.padding;
+    depth = top_depth;
+    list_children();
+    ++generation;
+    committed = true;
+}
+
+void RenderScene::commit() {
+    Impl& s = *impl_;
+    s.check_unshared("commit");
+    std::vector<uint32_t> ids;
+    std::vector<scene::TopLevelItem> items;
+    uint32_t depth = 0;
+    s.gather(ids, items, depth);
     scene::TopLevel top = scene::build_top_level(items);
-    s.wide = scene::collapse_top_level(top.bvh);
-    s.top = std::move(top);
-    s.item_ids = std::move(ids);
-    s.items = std::move(items);
-    s.bounds = s.top.bvh.root().bounds;
-    s.root_padding = s.top.padding;
-    s.depth = depth;
-    s.list_children();
-    ++s.generation;
-    s.committed = true;
+    s.install(std::move(top), std::move(ids), std::move(items), depth);
 }
 
 void RenderScene::refit(uint32_t id) {
     Geometry& g = impl_->geometry(id);
     MeshRecord* mesh = std::get_if<MeshRecord>(&g.what);
     if (!mesh) throw Error(impl_->what(id) + " is an instance: refit() the scene it places, then refit() this one");
-    const TriangleStore store(mesh->view);
-    std::vector<Triangle> moved(store.triangles().begin(), store.triangles().end());
+    const TriangleStore store(mesh->view);  // checked (finite coordinates) before anything changes
+    const std::span<const Triangle> moved = store.triangles();
     if (moved.size() != mesh->triangles.size())
         throw Error(mesh->view.name() + ": refit needs the same triangles, got " + std::to_string(moved.size()) +
                     " instead of " + std::to_string(mesh->triangles.size()));
-    Bvh bvh = mesh->bvh;
-    scene::refit_boxes(bvh, moved);
-    auto tracer = std::make_unique<Tracer>(MeshView(moved), bvh, impl_->config.tracer);
-    mesh->extent = scene::extent_of(bvh.root().bounds);
-    mesh->bvh = std::move(bvh);
-    mesh->triangles = std::move(moved);
-    mesh->tracer = std::move(tracer);
+    // In place: the tree keeps its shape (split references get their triangles' whole boxes), and the
+    // kernel's layout keeps its nodes and packing where it can (Tracer::refit).
+    std::copy(moved.begin(), moved.end(), mesh->triangles.begin());
+    refit_boxes(mesh->bvh, mesh->triangles);
+    mesh->tracer->refit(MeshView(mesh->triangles), mesh->bvh);
+    mesh->extent = scene::extent_of(mesh->bvh.root().bounds);
     if (impl_->committed) refit();
 }
 

@@ -27,6 +27,8 @@ struct MeshRecord {
     std::unique_ptr<Tracer> tracer;
     bool duplicates = false;  // some triangle is in several leaves (spatial splits)
     double extent = 0.0;      // scene::extent_of(the tree's root box)
+    // The triangles `view` shows when the scene owns them (loaded from a scene file); else null.
+    std::shared_ptr<const std::vector<Triangle>> owned;
 };
 
 struct InstanceRecord {
@@ -81,6 +83,22 @@ struct RenderScene::Impl {
     void check_unshared(const char* action) const;
     scene::TopLevelItem item_of(const scene::Geometry& g) const;
     void list_children();
+    // Adds a mesh whose view, triangles and tree are set: lays it out for the kernel. Returns its id.
+    uint32_t add_mesh(scene::MeshRecord record, uint32_t mask);
+    // The live geometries' ids and top-level items as they are now (instances' boxes retaken from
+    // their scenes), and the depth below this scene. Throws Error when there is none.
+    void gather(std::vector<uint32_t>& ids, std::vector<scene::TopLevelItem>& items, uint32_t& depth);
+    // Makes `top` (over `items`, of geometries `ids`) the committed top level.
+    void install(scene::TopLevel top, std::vector<uint32_t> ids, std::vector<scene::TopLevelItem> items,
+                 uint32_t depth);
+
+    // The mesh and its id when the committed top level holds just that one mesh (an instance of a
+    // built mesh): the walks then go straight to its kernel, as the instance's own box, tested by the
+    // parent, already bounds it. Else {nullptr, kInvalidIndex}.
+    std::pair<const scene::MeshRecord*, uint32_t> only_mesh() const {
+        if (item_ids.size() != 1) return {nullptr, kInvalidIndex};
+        return {geometries[item_ids[0]].mesh(), item_ids[0]};
+    }
 
     // The walks (scene_walks.cpp). The ray's tmax is the bound so far; `hit` keeps the best.
     void closest(const Ray& ray, scene::QueryState& state, uint32_t level, SceneHit& hit) const;

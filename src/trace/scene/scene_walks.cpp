@@ -142,7 +142,13 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
             },
             [&](const InstanceRecord& inst, uint32_t id) {
                 state.path[level] = id;
-                inst.scene->impl_->closest(scene::to_instance(inst.xf, bounded()), state, level + 1, best);
+                const Impl& child = *inst.scene->impl_;
+                const Ray local = scene::to_instance(inst.xf, bounded());
+                if (const auto [mesh, mesh_id] = child.only_mesh(); mesh) {
+                    if (child.geometries[mesh_id].mask & state.mask) mesh_closest(*mesh, mesh_id, local, state, best);
+                } else {
+                    child.closest(local, state, level + 1, best);
+                }
                 state.path[level] = kInvalidIndex;
                 return lower();
             });
@@ -159,7 +165,13 @@ bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t lev
             [&](const MeshRecord& mesh, uint32_t id) { return mesh_occluded(mesh, id, ray, state); },
             [&](const InstanceRecord& inst, uint32_t id) {
                 state.path[level] = id;
-                const bool hit = inst.scene->impl_->occluded(scene::to_instance(inst.xf, ray), state, level + 1);
+                const Impl& child = *inst.scene->impl_;
+                const Ray local = scene::to_instance(inst.xf, ray);
+                bool hit;
+                if (const auto [mesh, mesh_id] = child.only_mesh(); mesh)
+                    hit = (child.geometries[mesh_id].mask & state.mask) && mesh_occluded(*mesh, mesh_id, local, state);
+                else
+                    hit = child.occluded(local, state, level + 1);
                 state.path[level] = kInvalidIndex;
                 return hit;
             });

@@ -21,7 +21,7 @@ void measure(TopLevel& top, std::span<const TopLevelItem> items) {
 
 }  // namespace
 
-TopLevel build_top_level(std::span<const TopLevelItem> items) {
+std::vector<Triangle> top_level_triangles(std::span<const TopLevelItem> items) {
     // One triangle per box with two opposite corners as vertices: its bounds are the box exactly, and
     // the object-partitioning binned builder never clips it, so each item is in exactly one leaf.
     std::vector<Triangle> boxes(items.size());
@@ -29,6 +29,11 @@ TopLevel build_top_level(std::span<const TopLevelItem> items) {
         const AABB& b = items[i].box;
         boxes[i] = {b.lo, b.hi, Vec3{b.lo.x, b.hi.y, b.lo.z}};
     }
+    return boxes;
+}
+
+TopLevel build_top_level(std::span<const TopLevelItem> items) {
+    const std::vector<Triangle> boxes = top_level_triangles(items);
     BuildConfig config = BuildConfig::for_preset(Preset::binned);
     // One item per leaf: its box is then tested once, on the way down, and a leaf is one walk.
     config.limits.max_leaf_size = 1;
@@ -51,20 +56,6 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
         node.bounds = box;
     }
     measure(top, items);
-}
-
-void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles) {
-    for (size_t n = bvh.nodes.size(); n-- > 0;) {
-        BvhNode& node = bvh.nodes[n];
-        AABB box;
-        if (node.is_leaf()) {
-            for (uint32_t k = 0; k < node.reference_count; ++k)
-                box.extend(triangles[bvh.primitives[node.first + k]].bounds());
-        } else {
-            box = merge(bvh.nodes[node.first].bounds, bvh.nodes[node.first + 1].bounds);
-        }
-        node.bounds = box;
-    }
 }
 
 namespace {

@@ -30,10 +30,9 @@ struct TopLevel {
 // The binned SAH tree over the items' boxes (built by build() over one flat triangle per box, whose
 // bounds are the box exactly), or refitted to their current boxes.
 TopLevel build_top_level(std::span<const TopLevelItem> items);
+// Those flat triangles, one per item (a scene file's top level is stored as a tree over them).
+std::vector<Triangle> top_level_triangles(std::span<const TopLevelItem> items);
 void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items);
-// A binary tree's boxes recomputed bottom-up from its leaves' triangles (nodes are in depth-first
-// order, so children follow their parent).
-void refit_boxes(Bvh& bvh, std::span<const Triangle> triangles);
 
 // The ray as the box tests of one walk need it. Every box is grown by one allowance `grow`: the
 // tree's largest padding for this ray's origin, plus 2^-20 of the largest coordinate of the tree's
