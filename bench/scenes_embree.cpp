@@ -10,9 +10,6 @@
 // Diffuse rays bounce once from the primary hits. With MAX_TOP (>= 1000), top-level build times for
 // 10^3 .. MAX_TOP instances follow.
 // Usage: spacebvh_scenes_bench SCENE INSTANCES RAYS [RUNS [MAX_TOP]]   (SCENE: a file or builtin:NAME)
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -25,7 +22,7 @@
 #include "spacebvh/build.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/scene.hpp"
-#include "spacebvh/tools/embree_scene.hpp"
+#include "spacebvh/tools/embree_instances.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/verify.hpp"
@@ -89,59 +86,21 @@ std::vector<Affine> placements(size_t count, float spacing) {
     return out;
 }
 
-struct EmbreeTwoLevel {
-    RTCScene top = nullptr;
-    double build_ms = 0.0;
-    EmbreeTwoLevel(const tools::EmbreeScene& mesh, const std::vector<Affine>& placed) {
-        RTCDevice device = tools::embree_device();
-        top = rtcNewScene(device);
-        for (const Affine& a : placed) {
-            RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-            rtcSetGeometryInstancedScene(instance, mesh.handle());
-            rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, a.m.data());
-            rtcCommitGeometry(instance);
-            rtcAttachGeometry(top, instance);
-            rtcReleaseGeometry(instance);
-        }
-        const auto start = std::chrono::steady_clock::now();
-        rtcCommitScene(top);
-        build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-        tools::check_embree(device, "the two-level scene");
+// Embree's two-level scene of `placed` instances of the mesh (already built: only the top level is
+// committed here).
+std::unique_ptr<tools::EmbreeInstancedScene> embree_instances(const std::shared_ptr<const tools::EmbreeScene>& mesh,
+                                                              const std::vector<Affine>& placed) {
+    std::vector<tools::MeshPlacement> placements(placed.size());
+    for (size_t k = 0; k < placed.size(); ++k) {
+        placements[k].transforms = {placed[k]};
+        placements[k].path[0] = uint32_t(k);
     }
-    ~EmbreeTwoLevel() { rtcReleaseScene(top); }
-    void trace(std::span<const Ray> rays, std::span<float> t, bool occlusion) const {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                              RTCIntersectContext context;
-                              rtcInitIntersectContext(&context);
-                              for (size_t i = range.begin(); i != range.end(); ++i) {
-                                  RTCRayHit rh{};
-                                  rh.ray = {rays[i].org.x,
-                                            rays[i].org.y,
-                                            rays[i].org.z,
-                                            rays[i].tmin,
-                                            rays[i].dir.x,
-                                            rays[i].dir.y,
-                                            rays[i].dir.z,
-                                            0.0f,
-                                            rays[i].tmax,
-                                            0xFFFFFFFFu,
-                                            0,
-                                            0};
-                                  rh.hit.geomID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                                  if (occlusion) {
-                                      rtcOccluded1(top, &context, &rh.ray);
-                                      t[i] = rh.ray.tfar < 0.0f ? 0.0f : kInfinity;
-                                  } else {
-                                      rtcIntersect1(top, &context, &rh);
-                                      t[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? kInfinity : rh.ray.tfar;
-                                  }
-                              }
-                          });
-    }
-};
+    return std::make_unique<tools::EmbreeInstancedScene>(std::vector{mesh}, placements);
+}
 
-void trace_ours(const RenderScene& scene, std::span<const Ray> rays, std::span<float> t, bool occlusion) {
+// Ours (RenderScene) or Embree's (EmbreeInstancedScene): the t of each answer, 0 for occluded.
+template <class Traced>
+void trace_t(const Traced& scene, std::span<const Ray> rays, std::span<float> t, bool occlusion) {
     if (occlusion) {
         std::vector<uint8_t> blocked(rays.size());
         scene.occluded(rays, blocked);
@@ -266,7 +225,8 @@ void single_mesh(const tools::Scene& mesh, const tools::EmbreeScene& embree_mesh
 // Top-level build (attach and commit) of 10^3 .. max instances of `leaf`, ours against Embree's
 // commit of as many instance geometries.
 void top_level_scaling(const SceneConfig& config, const std::shared_ptr<RenderScene>& leaf,
-                       const tools::EmbreeScene& embree_mesh, size_t max, float diagonal) {  // of the mesh
+                       const std::shared_ptr<const tools::EmbreeScene>& embree_mesh, size_t max,
+                       float diagonal) {  // of the mesh
     std::printf(
         "| instances | ours attach ms | ours commit ms | Embree commit ms | ours commit/Embree | ours all/Embree |\n");
     for (size_t count = 1000; count <= max; count *= 10) {
@@ -278,9 +238,9 @@ void top_level_scaling(const SceneConfig& config, const std::shared_ptr<RenderSc
         start = std::chrono::steady_clock::now();
         ours.commit();
         const double commit_ms = ms_since(start);
-        const EmbreeTwoLevel embree(embree_mesh, placed);
-        std::printf("| %zu | %.1f | %.1f | %.1f | %.2f | %.2f |\n", count, attach_ms, commit_ms, embree.build_ms,
-                    commit_ms / embree.build_ms, (attach_ms + commit_ms) / embree.build_ms);
+        const double embree_ms = embree_instances(embree_mesh, placed)->top_build_milliseconds();
+        std::printf("| %zu | %.1f | %.1f | %.1f | %.2f | %.2f |\n", count, attach_ms, commit_ms, embree_ms,
+                    commit_ms / embree_ms, (attach_ms + commit_ms) / embree_ms);
     }
 }
 
@@ -300,15 +260,21 @@ int main(int argc, char** argv) try {
                 mesh.name.c_str(), mesh.triangles.size(), instances, double(instances) * double(mesh.triangles.size()),
                 ray_count, runs);
 
-    const tools::EmbreeScene embree_mesh(mesh, tools::EmbreeQuality::high);
+    const auto embree_mesh = std::make_shared<const tools::EmbreeScene>(mesh, tools::EmbreeQuality::high);
     SceneConfig config;
     config.recipe = TreeRecipe::for_builder("spatial");
     auto leaf = std::make_shared<RenderScene>(config, "mesh");
     const uint32_t mesh_id = leaf->attach_mesh(mesh.mesh());
     leaf->commit();
-    std::unique_ptr<EmbreeTwoLevel> embree;
-    const double embree_top_ms =
-        median_ms(runs, [&] { embree = std::make_unique<EmbreeTwoLevel>(embree_mesh, placed); });
+    std::unique_ptr<tools::EmbreeInstancedScene> embree;
+    std::vector<double> embree_commit_ms;
+    median_ms(runs, [&] {
+        embree.reset();
+        embree = embree_instances(embree_mesh, placed);
+        embree_commit_ms.push_back(embree->top_build_milliseconds());
+    });
+    std::sort(embree_commit_ms.begin(), embree_commit_ms.end());
+    const double embree_top_ms = embree_commit_ms[embree_commit_ms.size() / 2];
     std::unique_ptr<RenderScene> ours;
     const double ours_top_ms = median_ms(runs, [&] { ours = instanced(config, leaf, placed); });
     std::printf("top level (attach + commit): ours %.2f ms, Embree %.2f ms (commit only), ours/Embree %.2f\n",
@@ -339,9 +305,9 @@ int main(int argc, char** argv) try {
     for (const auto& [kind, rays] : kinds)
         for (bool occlusion : {false, true}) {
             std::vector<float> theirs(rays->size()), mine(rays->size());
-            const double embree_ms = median_ms(runs, [&] { embree->trace(*rays, theirs, occlusion); });
+            const double embree_ms = median_ms(runs, [&] { trace_t(*embree, *rays, theirs, occlusion); });
             for (const auto& [kernel, top] : traced) {
-                const double ours_ms = median_ms(runs, [&] { trace_ours(*top, *rays, mine, occlusion); });
+                const double ours_ms = median_ms(runs, [&] { trace_t(*top, *rays, mine, occlusion); });
                 if (kernel == Kernel::bvh8) bvh8_ms.push_back(ours_ms);
                 std::printf("| %s | %s | %s | %.1f | %.1f | %.2f | %zu |\n", kind, occlusion ? "occluded" : "closest",
                             to_string(kernel), ours_ms, embree_ms, embree_ms / ours_ms,
@@ -349,7 +315,7 @@ int main(int argc, char** argv) try {
             }
         }
 
-    single_mesh(mesh, embree_mesh, ray_count, runs);
+    single_mesh(mesh, *embree_mesh, ray_count, runs);
     flattened(mesh, placed, kinds, bvh8_ms, runs);
     if (max_top >= 1000) top_level_scaling(config, leaf, embree_mesh, max_top, mesh.diagonal());
 

@@ -5,9 +5,11 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "instanced_input.hpp"
 #include "spacebvh/tools/make_tree.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/trace.hpp"
+#include "spacebvh/scene_file.hpp"
 #include "spacebvh/tree_file.hpp"
 #include "tree_option.hpp"
 
@@ -117,6 +119,46 @@ nlohmann::json build_json(const BuildOptions& options, const BuiltTree& built, c
     return json;
 }
 
+// An instanced scene: its RenderScene built (each mesh's tree once, then the top levels) after the
+// memory estimate is printed and checked against the limit.
+void build_instances(const BuildOptions& options, const TreeRecipe& recipe) {
+    const InstancedInput input(options.source, options.scene.transform());
+    input.check_memory(recipe);
+    const auto start = std::chrono::steady_clock::now();
+    const std::shared_ptr<RenderScene> scene = input.build(SceneConfig{recipe, TracerConfig{}});
+    const double build_ms = milliseconds_since(start);
+    if (!options.save_path.empty()) save_render_scene(options.save_path, *scene, build_settings_text(recipe));
+    const size_t peak = peak_rss_bytes();
+    const uint64_t estimate = input.memory_estimate(recipe);
+    std::printf("scene            %s (instanced: %zu meshes, %zu instances, %llu instanced triangles)\n",
+                input.name().c_str(), input.meshes().size(), input.instance_count(),
+                (unsigned long long)input.instanced_triangles());
+    const std::string builder =
+        options.build.quality.empty() ? options.build.builder : "--quality " + options.build.quality;
+    std::printf("builder          %s (each mesh's tree), %u threads\n", builder.c_str(),
+                options.common.effective_threads());
+    std::printf("build            %.1f ms (every mesh's tree and layout, the instances, the top levels)\n", build_ms);
+    std::printf(
+        "bytes            %zu (the top scene: its top level and instances; the meshes' own scenes not "
+        "counted)\n",
+        scene->memory_bytes());
+    std::printf("peak memory      %.1f MiB (resident, whole process); the build's estimate %.1f MiB\n",
+                double(peak) / 1048576.0, double(estimate) / 1048576.0);
+    if (!options.save_path.empty()) std::printf("saved            %s (a scene file)\n", options.save_path.c_str());
+    nlohmann::json json = {{"scene", input.name()},
+                           {"triangles", input.instanced_triangles()},
+                           {"meshes", input.meshes().size()},
+                           {"instances", input.instance_count()},
+                           {"builder", builder},
+                           {"threads", options.common.effective_threads()},
+                           {"build_ms", build_ms},
+                           {"bytes", scene->memory_bytes()},
+                           {"peak_rss_bytes", peak},
+                           {"estimated_build_bytes", estimate}};
+    if (!options.save_path.empty()) json["saved"] = options.save_path;
+    write_json(options.common.json_path, json);
+}
+
 }  // namespace
 
 void add_build_command(CLI::App& app) {
@@ -132,6 +174,8 @@ void add_build_command(CLI::App& app) {
                         "save the tree to this file (docs/tree-format.md), for --tree of trace, render and compare");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
+        if (names_instanced_scene(options->source))
+            return build_instances(*options, options->build.options(options->build.builder));
         const Scene scene = load_scene(options->source, options->scene.transform());
         TreeRecipe recipe = options->build.options(options->build.builder);
         Progress progress("building", options->common);

@@ -3,10 +3,67 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "instanced_input.hpp"
+#include "spacebvh/memory_estimate.hpp"
 
 namespace spacebvh::cli {
 
 using namespace spacebvh::tools;
+
+namespace {
+
+void print_camera(const Camera& camera) {
+    std::printf("camera      %g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", camera.eye.x, camera.eye.y, camera.eye.z,
+                camera.target.x, camera.target.y, camera.target.z, camera.up.x, camera.up.y, camera.up.z,
+                camera.fovy_degrees);
+}
+
+nlohmann::json box_json(const AABB& bounds) {
+    return {{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}};
+}
+
+// An instanced scene: its meshes, instances, instanced triangles and the memory its build takes.
+nlohmann::json info_of_instances(const std::string& source, const SceneTransform& transform) {
+    const auto start = std::chrono::steady_clock::now();
+    const InstancedInput input(source, transform);
+    const double load_ms = milliseconds_since(start);
+    const AABB bounds = input.bounds();
+    uint64_t triangles = 0, degenerate = 0;
+    for (const Scene& mesh : input.meshes()) {
+        triangles += mesh.triangles.size();
+        degenerate += mesh.degenerate_count;
+    }
+    const TreeRecipe recipe = TreeRecipe::for_builder("binned");
+    const uint64_t estimate = input.memory_estimate(recipe);
+    std::printf("scene       %s (instanced)\n", input.name().c_str());
+    std::printf("meshes      %zu (%llu triangles, %llu degenerate: kept, never hit)\n", input.meshes().size(),
+                (unsigned long long)triangles, (unsigned long long)degenerate);
+    for (const Scene& mesh : input.meshes())
+        std::printf("  mesh      %s: %zu triangles\n", mesh.name.c_str(), mesh.triangles.size());
+    std::printf("instances   %zu (%zu placements of a mesh)\n", input.instance_count(), input.placements().size());
+    std::printf("instanced   %llu triangles\n", (unsigned long long)input.instanced_triangles());
+    std::printf("bounds      (%g, %g, %g) -> (%g, %g, %g)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
+                bounds.hi.y, bounds.hi.z);
+    std::printf("diagonal    %g\n", length(bounds.extent()));
+    print_camera(input.default_camera());
+    std::printf(
+        "memory      %s estimated to build it with binned (each mesh's tree once, the instances, the top "
+        "levels)\n",
+        format_bytes(estimate).c_str());
+    std::printf("load        %.1f ms\n", load_ms);
+    return {{"scene", input.name()},
+            {"meshes", input.meshes().size()},
+            {"instances", input.instance_count()},
+            {"triangles", triangles},
+            {"degenerate_triangles", degenerate},
+            {"instanced_triangles", input.instanced_triangles()},
+            {"estimated_build_bytes", estimate},
+            {"bounds", box_json(bounds)},
+            {"diagonal", length(bounds.extent())},
+            {"load_ms", load_ms}};
+}
+
+}  // namespace
 
 void add_info_command(CLI::App& app) {
     struct Options {
@@ -18,13 +75,18 @@ void add_info_command(CLI::App& app) {
     auto options = std::make_shared<Options>();
     CLI::App* command =
         app.add_subcommand("info", "print a scene's triangle count, degenerate triangles, bounds and camera");
-    command->add_option("scene", options->source, "scene file (.obj .ply .gltf .glb) or builtin:NAME")->required();
+    command
+        ->add_option("scene", options->source,
+                     "scene file (.obj .ply .gltf .glb), builtin:NAME or an instanced scene (builtin:forest:N)")
+        ->required();
     options->scene.add_to(*command);
     add_manifest_option(*command, options->manifest);
     options->common.add_to(*command);
     command->callback([options] {
-        const auto start = std::chrono::steady_clock::now();
         const SceneTransform transform = options->scene.transform();
+        if (names_instanced_scene(options->source))
+            return write_json(options->common.json_path, info_of_instances(options->source, transform));
+        const auto start = std::chrono::steady_clock::now();
         const Scene scene = load_scene(options->source, transform);
         const double load_ms = milliseconds_since(start);
         const AABB bounds = scene.bounds();
@@ -35,17 +97,14 @@ void add_info_command(CLI::App& app) {
         std::printf("bounds      (%g, %g, %g) -> (%g, %g, %g)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
                     bounds.hi.y, bounds.hi.z);
         std::printf("diagonal    %g\n", scene.diagonal());
-        std::printf("camera      %g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", camera.eye.x, camera.eye.y, camera.eye.z,
-                    camera.target.x, camera.target.y, camera.target.z, camera.up.x, camera.up.y, camera.up.z,
-                    camera.fovy_degrees);
+        print_camera(camera);
         std::printf("load        %.1f ms\n", load_ms);
-        nlohmann::json json = {
-            {"scene", scene.name},
-            {"triangles", scene.triangles.size()},
-            {"degenerate_triangles", scene.degenerate_count},
-            {"bounds", {{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}}},
-            {"diagonal", scene.diagonal()},
-            {"load_ms", load_ms}};
+        nlohmann::json json = {{"scene", scene.name},
+                               {"triangles", scene.triangles.size()},
+                               {"degenerate_triangles", scene.degenerate_count},
+                               {"bounds", box_json(bounds)},
+                               {"diagonal", scene.diagonal()},
+                               {"load_ms", load_ms}};
         write_json(options->common.json_path, json);
     });
 }

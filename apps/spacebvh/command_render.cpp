@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "instanced_input.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/render.hpp"
 #include "tree_option.hpp"
@@ -11,19 +12,51 @@ namespace spacebvh::cli {
 
 using namespace spacebvh::tools;
 
-void add_render_command(CLI::App& app) {
-    struct Options {
-        std::string source, output, kernel = "auto";
-        bool heatmap = false;
-        std::string quantity = "work";
-        double scale_max = 0.0;
-        SceneOptions scene;
-        BuildCliOptions build;
-        CameraOptions camera;
-        CommonOptions common;
-        TreeOption tree;
+namespace {
+
+struct RenderOptions {
+    std::string source, output, kernel = "auto";
+    bool heatmap = false;
+    std::string quantity = "work";
+    double scale_max = 0.0;
+    SceneOptions scene;
+    BuildCliOptions build;
+    CameraOptions camera;
+    CommonOptions common;
+    TreeOption tree;
+};
+
+// An instanced scene, shaded (its RenderScene built with the recipe, traced by the single-ray kernel
+// --kernel names); heat maps count one tree's work and are refused.
+void render_instances(const RenderOptions& options) {
+    if (options.heatmap)
+        throw Error("--heatmap: the traversal statistics are the one-mesh kernels'; scenes do not count them");
+    if (options.tree.given())
+        throw Error("--tree: " + options.source + " is an instanced scene; saved trees are one mesh's");
+    const InstancedInput input(options.source, options.scene.transform());
+    const TreeRecipe recipe = options.build.options(options.build.builder);
+    const TracerConfig tracer = instanced_scene_kernel(options.kernel);
+    const Camera camera = options.camera.camera.empty() ? input.default_camera() : Camera::parse(options.camera.camera);
+    input.check_memory(recipe);
+    const std::shared_ptr<RenderScene> scene = input.build(SceneConfig{recipe, tracer});
+    const uint32_t width = options.camera.width, height = options.camera.height;
+    if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
+        throw Error("--width and --height must be in [1, " + std::to_string(kMaxImageSide) + "]");
+    const auto normal = [&](const Ray& ray) -> std::optional<Vec3> {
+        const SceneHit hit = scene->intersect(ray);
+        if (!hit.is_hit()) return std::nullopt;
+        return input.world_triangle(hit).geometric_normal();
     };
-    auto options = std::make_shared<Options>();
+    write_png(options.output, render_shaded(normal, camera, width, height));
+    std::printf("wrote %s (%ux%u, shaded, scene %s with %zu instances, builder %s)\n", options.output.c_str(), width,
+                height, input.name().c_str(), input.instance_count(), options.build.builder.c_str());
+    write_json(options.common.json_path, {{"output", options.output}, {"builder", options.build.builder}});
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+    auto options = std::make_shared<RenderOptions>();
     CLI::App* command = app.add_subcommand("render", "render a shaded image or a heat map of traversal cost per pixel");
     command->add_option("scene", options->source, "scene file or builtin:NAME")->required();
     command->add_option("--output,-o", options->output, "PNG file to write")->required();
@@ -42,6 +75,7 @@ void add_render_command(CLI::App& app) {
     options->tree.add_to(*command, "render with this saved tree (build --save) instead of building one");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
+        if (names_instanced_scene(options->source)) return render_instances(*options);
         const SceneTransform transform = options->scene.transform();
         const Scene scene = load_scene(options->source, transform);
         const Camera camera = options->camera.camera_for(scene, options->source, transform);

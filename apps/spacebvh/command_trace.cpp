@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "instanced_input.hpp"
 #include "spacebvh/presets.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/trace.hpp"
@@ -65,6 +66,51 @@ void report_work_per_ray(const TraversalStats& stats, size_t ray_count, nlohmann
     }
 }
 
+// An instanced scene: its RenderScene built with the recipe and traced; the hit file's primitive is
+// the triangle's id in its own mesh.
+void trace_instances(const TraceOptions& options) {
+    if (options.tree.given())
+        throw Error("--tree: " + options.source + " is an instanced scene; saved trees are one mesh's");
+    if (options.stats)
+        throw Error("--stats: the traversal statistics are the one-mesh kernels'; scenes do not count them");
+    const InstancedInput input(options.source, options.scene.transform());
+    const std::vector<Ray> rays = read_ray_file(options.rays_path);
+    const TreeRecipe recipe = options.build.options(options.build.builder);
+    const TracerConfig tracer = instanced_scene_kernel(options.kernel);
+    input.check_memory(recipe);
+    auto start = std::chrono::steady_clock::now();
+    const std::shared_ptr<RenderScene> scene = input.build(SceneConfig{recipe, tracer});
+    const double build_ms = milliseconds_since(start);
+    std::vector<HitRecord> records(rays.size());
+    start = std::chrono::steady_clock::now();
+    if (options.occlusion) {
+        std::vector<uint8_t> occluded(rays.size());
+        scene->occluded(rays, occluded);
+        for (size_t i = 0; i < rays.size(); ++i) records[i] = occlusion_record(occluded[i]);
+    } else {
+        std::vector<SceneHit> hits(rays.size());
+        scene->intersect(rays, hits);
+        for (size_t i = 0; i < rays.size(); ++i) records[i] = {hits[i].t, hits[i].primitive};
+    }
+    const double trace_ms = milliseconds_since(start);
+    size_t hit_count = 0;
+    for (const HitRecord& record : records) hit_count += record.is_hit();
+    write_hit_file(options.hits_path, records);
+    const std::string kernel = options.kernel == "auto" ? "bvh8" : options.kernel;
+    std::printf(
+        "%zu rays, %zu %s, %.1f ms (%.2f Mrays/s, %u threads), scene %s (%zu instances), builder %s, kernel %s\n",
+        rays.size(), hit_count, options.occlusion ? "occluded" : "hits", trace_ms,
+        double(rays.size()) / trace_ms / 1000.0, options.common.effective_threads(), input.name().c_str(),
+        input.instance_count(), options.build.builder.c_str(), kernel.c_str());
+    write_json(options.common.json_path, {{"rays", rays.size()},
+                                          {"hits", hit_count},
+                                          {"trace_ms", trace_ms},
+                                          {"builder", options.build.builder},
+                                          {"kernel", kernel},
+                                          {"build_ms", build_ms},
+                                          {"instances", input.instance_count()}});
+}
+
 }  // namespace
 
 void add_trace_command(CLI::App& app) {
@@ -82,6 +128,7 @@ void add_trace_command(CLI::App& app) {
     options->tree.add_to(*command, "trace this saved tree (build --save) instead of building one");
     command->callback([options] {
         const auto limit = options->common.thread_limit();
+        if (names_instanced_scene(options->source)) return trace_instances(*options);
         const Scene scene = load_scene(options->source, options->scene.transform());
         const std::vector<Ray> rays = read_ray_file(options->rays_path);
         const TreeRecipe build_options = options->build.options(options->build.builder);

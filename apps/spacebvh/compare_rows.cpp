@@ -13,15 +13,20 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs,
     const size_t total = measurements.size() * 2 * size_t(runs + 1);
     size_t done = 0;
     std::vector<Hit> hits;
+    std::vector<SceneHit> scene_hits;
     std::vector<uint8_t> occluded;
     for (const bool occlusion : {false, true}) {
         auto trace = [&](size_t m) {
             Measurement& measurement = measurements[m];
             throw_if_interrupted();
-            hits.resize(occlusion ? 0 : measurement.rays.size());
+            const bool scene = bool(measurement.intersect_scene);
+            hits.resize(occlusion || scene ? 0 : measurement.rays.size());
+            scene_hits.resize(occlusion || !scene ? 0 : measurement.rays.size());
             occluded.resize(occlusion ? measurement.rays.size() : 0);
             if (occlusion)
                 measurement.occluded(measurement.rays, occluded);
+            else if (scene)
+                measurement.intersect_scene(measurement.rays, scene_hits);
             else
                 measurement.intersect(measurement.rays, hits);
             progress(double(++done) / double(total));
@@ -37,7 +42,9 @@ void measure_round_robin(std::vector<Measurement>& measurements, int runs,
             records.resize(measurement.rays.size());
             for (size_t i = 0; i < measurement.rays.size(); ++i) {
                 const size_t ray = measurement.order.empty() ? i : measurement.order[i];
-                records[ray] = occlusion ? occlusion_record(occluded[i]) : to_record(hits[i]);
+                records[ray] = occlusion            ? occlusion_record(occluded[i])
+                               : scene_hits.empty() ? to_record(hits[i])
+                                                    : HitRecord{scene_hits[i].t, scene_hits[i].primitive};
             }
         }
         for (int run = 0; run < runs; ++run) {
@@ -70,15 +77,25 @@ void count_work_per_ray(const Tracer& tracer, std::span<const Ray> rays, KindRes
 }
 
 void count_wrong_answers(const Scene& scene, const std::vector<Ray> (&ray_sets)[3], std::vector<Row>& rows,
-                         size_t first_embree_row) {
+                         size_t first_embree_row, const SceneArbiter* instances) {
+    const auto wrong = [&](std::span<const Ray> rays, const std::vector<HitRecord>& mine,
+                           const std::vector<HitRecord>& theirs, bool occlusion) {
+        if (!instances) return verify_against_reference(scene, rays, mine, theirs, occlusion).ours_wrong;
+        return verify_with_arbiter(rays, mine, theirs, instances->diagonal(),
+                                   [&](const Ray& ray) {
+                                       return occlusion ? occlusion_record(instances->occluded(ray))
+                                                        : instances->closest_hit(ray).hit;
+                                   })
+            .ours_wrong;
+    };
     for (size_t r = 0; r < rows.size(); ++r) {
         const size_t reference = r < first_embree_row ? first_embree_row : 0;
         for (RayKind kind : kKinds) {
             const auto& rays = ray_sets[int(kind)];
             KindResult& mine = rows[r].kinds[int(kind)];
             const KindResult& theirs = rows[reference].kinds[int(kind)];
-            mine.wrong = verify_against_reference(scene, rays, mine.closest, theirs.closest, false).ours_wrong +
-                         verify_against_reference(scene, rays, mine.occlusion, theirs.occlusion, true).ours_wrong;
+            mine.wrong =
+                wrong(rays, mine.closest, theirs.closest, false) + wrong(rays, mine.occlusion, theirs.occlusion, true);
         }
     }
 }

@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "spacebvh/cost_model.hpp"
+#include "spacebvh/scene.hpp"
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/tools/rays.hpp"
+#include "spacebvh/tools/scene_arbiter.hpp"
 #include "spacebvh/trace.hpp"
 
 namespace spacebvh::cli::compare {
@@ -56,6 +58,8 @@ struct Measurement {
     std::vector<uint32_t> order;
     std::function<void(std::span<const Ray>, std::span<Hit>)> intersect;
     std::function<void(std::span<const Ray>, std::span<uint8_t>)> occluded;
+    // In place of `intersect` for a scene of instances (RenderScene, Embree's two-level scene).
+    std::function<void(std::span<const Ray>, std::span<SceneHit>)> intersect_scene;
 };
 
 // Times every measurement `runs` times, round robin: run 1 of every row, then run 2 of every row, and
@@ -73,8 +77,9 @@ void count_work_per_ray(const Tracer& tracer, std::span<const Ray> rays, KindRes
 
 // Every row's answers against a reference row's: the first Embree row (at `first_embree_row`) for our
 // rows, our first row for Embree's; the exact arbiter settles each disagreement, and the answers it
-// rejects are the row's `wrong` count.
+// rejects are the row's `wrong` count. The arbiter is the scene's: the mesh's, or with `instances`
+// the instanced scene's (every placement's triangles, each for the ray in the placement's space).
 void count_wrong_answers(const Scene& scene, const std::vector<Ray> (&ray_sets)[3], std::vector<Row>& rows,
-                         size_t first_embree_row);
+                         size_t first_embree_row, const SceneArbiter* instances = nullptr);
 
 }  // namespace spacebvh::cli::compare

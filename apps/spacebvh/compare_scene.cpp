@@ -26,24 +26,6 @@ std::vector<uint32_t> pixel_order(uint32_t width, uint32_t height, uint32_t tile
     return identity;
 }
 
-std::vector<Ray> gathered(const std::vector<Ray>& rays, const std::vector<uint32_t>& order) {
-    std::vector<Ray> ordered;
-    ordered.reserve(order.size());
-    for (uint32_t i : order) ordered.push_back(rays[i]);
-    return ordered;
-}
-
-template <class Intersect, class Occluded>
-Measurement& add_measurement(SceneComparison& comparison, KindResult& result, std::span<const Ray> rays,
-                             Intersect intersect, Occluded occluded) {
-    comparison.measurements.push_back({&result, rays, {}, {}, intersect, occluded});
-    return comparison.measurements.back();
-}
-
-void show_rows_built(const ComparePlan& plan, const SceneComparison& comparison, Progress& progress) {
-    progress.update(kBuildShare * double(comparison.rows.size()) / double(plan.row_count()));
-}
-
 // A builder's tree, built (or loaded) --build-runs times: the last one, and every run's time.
 struct TimedTree {
     Bvh bvh;
@@ -99,21 +81,6 @@ void add_kernel_row(const ComparePlan& plan, SceneComparison& comparison, const 
                      : kernel + ": " + row.kernels[0] + ", " + row.kernels[1] + ", " + row.kernels[2];
 }
 
-// Where Embree's packets trace the primary rays: 4x4 tiles of the row-major image (none when --tile 0
-// keeps our rays row-major too), their answers put back in our order.
-struct EmbreePacketOrder {
-    std::vector<uint32_t> tiles_of_16;
-    std::vector<uint32_t> position_in_primary;  // row-major pixel -> our ray index
-
-    EmbreePacketOrder(const ComparePlan& plan, const SceneComparison& comparison)
-        : position_in_primary(comparison.primary_order.size()) {
-        if (plan.options.tile != 0)
-            tiles_of_16 = tile_order(comparison.parameters.width, comparison.parameters.height, 4);
-        for (size_t i = 0; i < comparison.primary_order.size(); ++i)
-            position_in_primary[comparison.primary_order[i]] = uint32_t(i);
-    }
-};
-
 // Embree's measurements of `row`: single rays (rtcIntersect1/rtcOccluded1), or 16-ray packets
 // (rtcIntersect16/rtcOccluded16) with the primary rays in 4x4 tiles.
 void add_embree_measurements(SceneComparison& comparison, Row& row, const EmbreeScene* traced, bool packets,
@@ -134,10 +101,7 @@ void add_embree_measurements(SceneComparison& comparison, Row& row, const Embree
             Measurement& tiled = add_measurement(
                 comparison, result, {}, [traced](auto r, auto h) { traced->intersect16(r, h); },
                 [traced](auto r, auto o) { traced->occluded16(r, o); });
-            tiled.reordered = gathered(comparison.primary_row_major, packet_order.tiles_of_16);
-            tiled.rays = tiled.reordered;
-            for (uint32_t pixel : packet_order.tiles_of_16)
-                tiled.order.push_back(packet_order.position_in_primary[pixel]);
+            packet_order.apply(comparison, tiled);
         }
     }
 }
@@ -168,11 +132,46 @@ void add_embree_row(const ComparePlan& plan, SceneComparison& comparison, Embree
 
 }  // namespace
 
+std::vector<Ray> gathered(const std::vector<Ray>& rays, const std::vector<uint32_t>& order) {
+    std::vector<Ray> ordered;
+    ordered.reserve(order.size());
+    for (uint32_t i : order) ordered.push_back(rays[i]);
+    return ordered;
+}
+
+Measurement& add_measurement(SceneComparison& comparison, KindResult& result, std::span<const Ray> rays,
+                             std::function<void(std::span<const Ray>, std::span<Hit>)> intersect,
+                             std::function<void(std::span<const Ray>, std::span<uint8_t>)> occluded) {
+    comparison.measurements.push_back({&result, rays, {}, {}, std::move(intersect), std::move(occluded), {}});
+    return comparison.measurements.back();
+}
+
+void show_rows_built(const ComparePlan& plan, const SceneComparison& comparison, Progress& progress) {
+    progress.update(kBuildShare * double(comparison.rows.size()) / double(plan.row_count()));
+}
+
+EmbreePacketOrder::EmbreePacketOrder(const ComparePlan& plan, const SceneComparison& comparison)
+    : position_in_primary(comparison.primary_order.size()) {
+    if (plan.options.tile != 0) tiles_of_16 = tile_order(comparison.parameters.width, comparison.parameters.height, 4);
+    for (size_t i = 0; i < comparison.primary_order.size(); ++i)
+        position_in_primary[comparison.primary_order[i]] = uint32_t(i);
+}
+
+void EmbreePacketOrder::apply(const SceneComparison& comparison, Measurement& measurement) const {
+    if (tiles_of_16.empty()) return;
+    measurement.reordered = gathered(comparison.primary_row_major, tiles_of_16);
+    measurement.rays = measurement.reordered;
+    for (uint32_t pixel : tiles_of_16) measurement.order.push_back(position_in_primary[pixel]);
+}
+
 SceneComparison load_comparison(const ComparePlan& plan, const std::string& source) {
     const CompareOptions& options = plan.options;
     SceneComparison comparison;
     comparison.source = source;
-    comparison.scene = load_scene(source, plan.transform);
+    if (names_instanced_scene(source))
+        load_instanced_comparison(plan, comparison);
+    else
+        comparison.scene = load_scene(source, plan.transform);
     RaySetParameters& parameters = comparison.parameters;
     parameters.random_count = options.random_count;
     parameters.seed = options.seed;
@@ -185,6 +184,7 @@ SceneComparison load_comparison(const ComparePlan& plan, const std::string& sour
 }
 
 void add_our_rows(const ComparePlan& plan, SceneComparison& comparison, Progress& progress) {
+    if (comparison.instanced) return add_our_instanced_rows(plan, comparison, progress);
     for (const BuilderSpec& builder : plan.builders) {
         const TimedTree tree = timed_tree(plan, builder, comparison.scene);
         const std::string label = builder.saved_tree ? plan.options.tree.path + ": " + tree.bvh.builder : builder.label;
@@ -206,12 +206,13 @@ void add_our_rows(const ComparePlan& plan, SceneComparison& comparison, Progress
 
 void add_embree_rows(const ComparePlan& plan, SceneComparison& comparison, Progress& progress) {
     const EmbreePacketOrder packet_order(plan, comparison);
+    const auto add_embree = comparison.instanced ? add_embree_instanced_row : add_embree_row;
     for (const EmbreeQuality quality : plan.embree_rows) {
-        add_embree_row(plan, comparison, quality, false, packet_order);
+        add_embree(plan, comparison, quality, false, packet_order);
         show_rows_built(plan, comparison, progress);
     }
     for (const EmbreeQuality quality : plan.embree_packet_rows) {
-        add_embree_row(plan, comparison, quality, true, packet_order);
+        add_embree(plan, comparison, quality, true, packet_order);
         show_rows_built(plan, comparison, progress);
     }
 }
@@ -220,28 +221,38 @@ void measure(const ComparePlan& plan, SceneComparison& comparison, Progress& pro
     measure_round_robin(comparison.measurements, plan.options.runs,
                         [&](double within) { progress.update(kBuildShare + (1.0 - kBuildShare) * within); });
     if (plan.verifies())
-        count_wrong_answers(comparison.scene, comparison.ray_sets, comparison.rows, plan.our_row_count());
+        count_wrong_answers(comparison.scene, comparison.ray_sets, comparison.rows, plan.our_row_count(),
+                            comparison.instanced ? &comparison.instanced->arbiter() : nullptr);
 }
 
 nlohmann::json report(const ComparePlan& plan, const SceneComparison& comparison) {
     const Scene& scene = comparison.scene;
     const auto& ray_sets = comparison.ray_sets;
     const bool with_epo = !plan.options.no_epo;
-    std::printf("## %s: %zu triangles; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(),
-                scene.triangles.size(), ray_sets[0].size(), ray_sets[1].size(), comparison.parameters.width,
-                comparison.parameters.height, ray_sets[2].size());
+    std::string counts = std::to_string(comparison.triangle_count()) + " triangles";
+    if (comparison.instanced)
+        counts += " in " + std::to_string(comparison.instanced->instance_count()) + " instances of " +
+                  std::to_string(comparison.instanced->meshes().size()) + " meshes";
+    std::printf("## %s: %s; %zu random, %zu primary (%ux%u), %zu diffuse rays\n\n", scene.name.c_str(), counts.c_str(),
+                ray_sets[0].size(), ray_sets[1].size(), comparison.parameters.width, comparison.parameters.height,
+                ray_sets[2].size());
     print_table(comparison.rows, plan.verifies(), with_epo);
     nlohmann::json json_rows = nlohmann::json::array();
     for (const Row& row : comparison.rows) json_rows.push_back(row_json(row, plan.verifies(), with_epo));
     std::printf("\npeak memory so far: %.1f MiB resident (whole process)\n\n",
                 double(peak_rss_bytes()) / (1024.0 * 1024.0));
     std::fflush(stdout);
-    return {
+    nlohmann::json json = {
         {"scene", scene.name},
         {"source", comparison.source},
-        {"triangles", scene.triangles.size()},
+        {"triangles", comparison.triangle_count()},
         {"rays", {{"random", ray_sets[0].size()}, {"primary", ray_sets[1].size()}, {"diffuse", ray_sets[2].size()}}},
         {"rows", json_rows}};
+    if (comparison.instanced) {
+        json["instances"] = comparison.instanced->instance_count();
+        json["meshes"] = comparison.instanced->meshes().size();
+    }
+    return json;
 }
 
 }  // namespace spacebvh::cli::compare

@@ -78,7 +78,7 @@ nlohmann::json row_json(const Row& row, bool verified, bool with_epo) {
     // Ours: the layout's exact size; Embree's: what its allocators reserved, which varies with the
     // thread count, hence another name (not part of a run's deterministic result).
     if (row.layout_bytes_per_triangle >= 0)
-        json[ours ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
+        json[row.cost ? "layout_bytes_per_triangle" : "allocated_bytes_per_triangle"] = row.layout_bytes_per_triangle;
     if (ours) {
         json["nodes"] = row.stats->nodes;
         json["references"] = row.stats->references;

@@ -5,6 +5,8 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +39,11 @@ struct Image {
 // colour for misses. Rows are traced in parallel on the calling thread's oneTBB arena.
 // Throws Error for a zero or absurd image size (more than 16384 on a side) or a bad camera.
 Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height);
+// The same picture through any tracer (a scene of instances): `hit_normal(ray)` is the geometric
+// normal (any length) of the triangle the ray's closest hit is on, nothing for a miss. Called from
+// several threads at once.
+Image render_shaded(const std::function<std::optional<Vec3>(const Ray&)>& hit_normal, const Camera& camera,
+                    uint32_t width, uint32_t height);
 
 enum class HeatmapQuantity {
     work,              // nodes visited + triangles tested (default)

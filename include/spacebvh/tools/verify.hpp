@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -40,5 +41,11 @@ struct VerificationReport {
 VerificationReport verify_against_reference(const Scene& scene, std::span<const Ray> rays,
                                             std::span<const HitRecord> ours, std::span<const HitRecord> reference,
                                             bool occlusion);
+// The same check with the arbiter's answer for a ray given by `arbiter` (called for disagreements
+// only, from several threads at once): for answers that are not one mesh's, such as a scene of
+// instances (scene_arbiter.hpp). `scene_diagonal` sets the agreement tolerance (hits_agree).
+VerificationReport verify_with_arbiter(std::span<const Ray> rays, std::span<const HitRecord> ours,
+                                       std::span<const HitRecord> reference, float scene_diagonal,
+                                       const std::function<HitRecord(const Ray&)>& arbiter);
 
 }  // namespace spacebvh::tools

@@ -9,13 +9,12 @@
 #include <string>
 #include <utility>
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/partitioner.h>
-
 #include "spacebvh/error.hpp"
+#include "tools/embree/embree_internal.hpp"
 
 namespace spacebvh::tools {
+
+using namespace embree_detail;
 
 namespace {
 
@@ -53,62 +52,9 @@ const char* error_name(RTCError code) {
     return "error";
 }
 
-constexpr size_t kChunkRays = 1024;  // rays per oneTBB task
-
-// Runs body(first, last) over chunks of exactly kChunkRays rays (the last one shorter), one task per
-// chunk, in the caller's arena.
-template <class Body>
-void for_each_chunk(size_t count, Body body) {
-    const size_t chunks = (count + kChunkRays - 1) / kChunkRays;
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, chunks, 1),
-        [&](const tbb::blocked_range<size_t>& range) {
-            for (size_t c = range.begin(); c != range.end(); ++c)
-                body(c * kChunkRays, std::min(count, (c + 1) * kChunkRays));
-        },
-        tbb::simple_partitioner());
-}
-
-void check_sizes(size_t rays, size_t results, const char* what) {
-    if (rays != results)
-        throw Error(std::string("Embree ") + what + ": " + std::to_string(rays) + " rays but room for " +
-                    std::to_string(results) + " results");
-}
-
-RTCRay to_embree(const Ray& ray) {
-    RTCRay r;
-    r.org_x = ray.org.x;
-    r.org_y = ray.org.y;
-    r.org_z = ray.org.z;
-    r.tnear = ray.tmin;
-    r.dir_x = ray.dir.x;
-    r.dir_y = ray.dir.y;
-    r.dir_z = ray.dir.z;
-    r.time = 0.0f;
-    r.tfar = ray.tmax;
-    r.mask = ~0u;
-    r.id = 0;
-    r.flags = 0;
-    return r;
-}
-
-// Lane `i` of a 16-wide packet.
-void set_lane(RTCRay16& p, int i, const Ray& ray) {
-    p.org_x[i] = ray.org.x;
-    p.org_y[i] = ray.org.y;
-    p.org_z[i] = ray.org.z;
-    p.tnear[i] = ray.tmin;
-    p.dir_x[i] = ray.dir.x;
-    p.dir_y[i] = ray.dir.y;
-    p.dir_z[i] = ray.dir.z;
-    p.time[i] = 0.0f;
-    p.tfar[i] = ray.tmax;
-    p.mask[i] = ~0u;
-    p.id[i] = uint32_t(i);
-    p.flags[i] = 0;
-}
-
 }  // namespace
+
+int64_t embree_detail::embree_allocated_bytes() { return g_embree_bytes.load(); }
 
 // Throws Error if the last Embree call on this thread failed.
 void check_embree(RTCDevice device, const char* what) {
@@ -266,75 +212,36 @@ Hit EmbreeScene::intersect(const Ray& ray) const {
     return hit;
 }
 
-bool EmbreeScene::occluded(const Ray& ray) const {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRay r = to_embree(ray);
-    rtcOccluded1(scene_, &context, &r);
-    return r.tfar == -kInfinity;  // Embree marks an occluded ray with tfar = -inf
-}
+bool EmbreeScene::occluded(const Ray& ray) const { return occluded1(scene_, ray); }
 
 void EmbreeScene::intersect(std::span<const Ray> rays, std::span<Hit> hits) const {
-    check_sizes(rays.size(), hits.size(), "intersect");
-    for_each_chunk(rays.size(), [&](size_t first, size_t last) {
-        for (size_t i = first; i < last; ++i) hits[i] = intersect(rays[i]);
-    });
+    answer_each(rays, hits, "intersect", [this](const Ray& ray) { return intersect(ray); });
 }
 
 void EmbreeScene::occluded(std::span<const Ray> rays, std::span<uint8_t> occluded_out) const {
-    check_sizes(rays.size(), occluded_out.size(), "occluded");
-    for_each_chunk(rays.size(), [&](size_t first, size_t last) {
-        for (size_t i = first; i < last; ++i) occluded_out[i] = occluded(rays[i]) ? 1 : 0;
-    });
+    answer_each(rays, occluded_out, "occluded", [this](const Ray& ray) { return uint8_t(occluded(ray) ? 1 : 0); });
 }
 
 void EmbreeScene::intersect16(std::span<const Ray> rays, std::span<Hit> hits) const {
     check_sizes(rays.size(), hits.size(), "intersect16");
-    for_each_chunk(rays.size(), [&](size_t first, size_t last) {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRayHit16 packet;
-        alignas(64) int valid[16];
-        for (size_t group = first; group < last; group += 16) {
-            const int lanes = int(std::min<size_t>(16, last - group));
-            for (int i = 0; i < 16; ++i) {
-                valid[i] = i < lanes ? -1 : 0;
-                set_lane(packet.ray, i, rays[group + std::min(i, lanes - 1)]);  // masked lanes: any valid ray
-                packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-                packet.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
-                packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    for_each_packet(rays, scene_, [&](size_t group, int lanes, const RTCRayHit16& packet) {
+        for (int i = 0; i < lanes; ++i) {
+            Hit hit;
+            if (packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
+                hit.t = packet.ray.tfar[i];
+                hit.primitive = packet.hit.primID[i];
+                hit.u = packet.hit.u[i];
+                hit.v = packet.hit.v[i];
             }
-            rtcIntersect16(valid, scene_, &context, &packet);
-            for (int i = 0; i < lanes; ++i) {
-                Hit hit;
-                if (packet.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) {
-                    hit.t = packet.ray.tfar[i];
-                    hit.primitive = packet.hit.primID[i];
-                    hit.u = packet.hit.u[i];
-                    hit.v = packet.hit.v[i];
-                }
-                hits[group + i] = hit;
-            }
+            hits[group + i] = hit;
         }
     });
 }
 
 void EmbreeScene::occluded16(std::span<const Ray> rays, std::span<uint8_t> occluded_out) const {
     check_sizes(rays.size(), occluded_out.size(), "occluded16");
-    for_each_chunk(rays.size(), [&](size_t first, size_t last) {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRay16 packet;
-        alignas(64) int valid[16];
-        for (size_t group = first; group < last; group += 16) {
-            const int lanes = int(std::min<size_t>(16, last - group));
-            for (int i = 0; i < 16; ++i) {
-                valid[i] = i < lanes ? -1 : 0;
-                set_lane(packet, i, rays[group + std::min(i, lanes - 1)]);
-            }
-            rtcOccluded16(valid, scene_, &context, &packet);
-            for (int i = 0; i < lanes; ++i) occluded_out[group + i] = packet.tfar[i] == -kInfinity ? 1 : 0;
-        }
+    for_each_occlusion_packet(rays, scene_, [&](size_t group, int lanes, const RTCRay16& packet) {
+        for (int i = 0; i < lanes; ++i) occluded_out[group + i] = packet.tfar[i] == -kInfinity ? 1 : 0;
     });
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include <oneapi/tbb/blocked_range.h>
@@ -81,27 +82,32 @@ bool hits_agree(const HitRecord& a, const HitRecord& b, const Ray& ray, float sc
 VerificationReport verify_against_reference(const Scene& scene, std::span<const Ray> rays,
                                             std::span<const HitRecord> ours, std::span<const HitRecord> reference,
                                             bool occlusion) {
+    return verify_with_arbiter(rays, ours, reference, scene.diagonal(), [&](const Ray& ray) {
+        return occlusion ? arbiter_occlusion(scene, ray) : arbiter_closest_hit(scene, ray);
+    });
+}
+
+VerificationReport verify_with_arbiter(std::span<const Ray> rays, std::span<const HitRecord> ours,
+                                       std::span<const HitRecord> reference, float scene_diagonal,
+                                       const std::function<HitRecord(const Ray&)>& arbiter) {
     if (ours.size() != rays.size() || reference.size() != rays.size())
         throw Error("verify: " + std::to_string(rays.size()) + " rays but " + std::to_string(ours.size()) +
                     " of our answers and " + std::to_string(reference.size()) + " reference answers");
-    const float diagonal = scene.diagonal();
-
     tbb::combinable<Tally> tallies;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
         Tally& tally = tallies.local();
         for (size_t i = range.begin(); i != range.end(); ++i) {
-            if (hits_agree(ours[i], reference[i], rays[i], diagonal)) continue;
+            if (hits_agree(ours[i], reference[i], rays[i], scene_diagonal)) continue;
             // Only disagreements pay for the brute-force arbiter.
             ++tally.disagreements;
-            const HitRecord truth = occlusion ? arbiter_occlusion(scene, rays[i]) : arbiter_closest_hit(scene, rays[i]);
-            if (!hits_agree(ours[i], truth, rays[i], diagonal)) {
+            const HitRecord truth = arbiter(rays[i]);
+            if (!hits_agree(ours[i], truth, rays[i], scene_diagonal)) {
                 ++tally.ours_wrong;
                 tally.add_wrong(i);
             }
-            if (!hits_agree(reference[i], truth, rays[i], diagonal)) ++tally.reference_wrong;
+            if (!hits_agree(reference[i], truth, rays[i], scene_diagonal)) ++tally.reference_wrong;
         }
     });
-
     VerificationReport report;
     report.rays = rays.size();
     tallies.combine_each([&](const Tally& t) {

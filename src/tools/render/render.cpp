@@ -4,6 +4,8 @@
 #include "spacebvh/tools/render.hpp"
 
 #include <algorithm>
+#include <functional>
+#include <optional>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -195,6 +197,17 @@ std::array<uint8_t, 3> heatmap_colour(double t) {
 }
 
 Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& camera, uint32_t width, uint32_t height) {
+    return render_shaded(
+        [&](const Ray& ray) -> std::optional<Vec3> {
+            const Hit hit = tracer.intersect(ray);
+            if (!hit.is_hit()) return std::nullopt;
+            return scene.triangles[hit.primitive].geometric_normal();
+        },
+        camera, width, height);
+}
+
+Image render_shaded(const std::function<std::optional<Vec3>(const Ray&)>& hit_normal, const Camera& camera,
+                    uint32_t width, uint32_t height) {
     check_size(width, height, "render_shaded");
     const std::vector<Ray> rays = generate_primary_rays(camera, width, height);
     Image image(width, height);
@@ -202,13 +215,13 @@ Image render_shaded(const Scene& scene, const Tracer& tracer, const Camera& came
         for (uint32_t y = rows.begin(); y != rows.end(); ++y) {
             for (uint32_t x = 0; x < width; ++x) {
                 const Ray& ray = rays[size_t(y) * width + x];
-                Hit hit = tracer.intersect(ray);
-                if (!hit.is_hit()) {
+                const std::optional<Vec3> normal = hit_normal(ray);
+                if (!normal) {
                     image.set_pixel(x, y, kBackground);
                     continue;
                 }
                 // Headlight: surfaces facing the camera are bright, grazing ones dark; either side.
-                Vec3 n = scene.triangles[hit.primitive].geometric_normal();
+                const Vec3 n = *normal;
                 double nn = std::sqrt(double(dot(n, n))), dd = std::sqrt(double(dot(ray.dir, ray.dir)));
                 double c = (nn > 0.0 && dd > 0.0) ? std::abs(double(dot(n, ray.dir))) / (nn * dd) : 0.0;
                 double level = 0.12 + 0.88 * std::min(c, 1.0);
