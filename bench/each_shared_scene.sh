@@ -7,14 +7,15 @@
 # rotated 45/45/45), or those in $STEMS, which may name built-in scenes too (builtin:interior, its
 # JSON named builtin_interior). RUNS=N repeats the whole loop N times (on a shared machine
 # Embree's rows vary between runs) and keeps each run's JSON in $BENCH_OUT/PREFIX_runs/RUN/. Used by
-# bench/PREFIX_shared_scenes.sh, whose command line it prints first.
+# bench/PREFIX_shared_scenes.sh, whose command line it prints first. SPACEBVH_CLI: the executable
+# (default ./build/spacebvh).
 # Usage: [RUNS=N] bash bench/each_shared_scene.sh PREFIX COMPARE_ARGS...   (from the repository root)
 set -euo pipefail
 prefix=$1
 shift
 source "$(dirname "$0")/lib/scenes.sh"
 require_scenes
-cli=./build/spacebvh
+cli=${SPACEBVH_CLI:-./build/spacebvh}
 out=${BENCH_OUT:-bench/out}
 runs=${RUNS:-1}
 mkdir -p "$out"

@@ -8,7 +8,9 @@
 # (the portable build picks its kernels at run time). Single thread.
 # Usage: [SCENE=$SPACEBVH_SCENES/crytek_sponza/crytek_sponza.obj (bench/lib/scenes.sh)] [ROTATE=x:45,y:45,z:45|-]
 #        [BUILDER=spatial+opt] [KERNELS="bvh8 bvh8+moller"] [RAYS=20000] [SIDE=160]
-#        bash bench/work_per_ray.sh > work.md
+#        [BINARIES=DIR] bash bench/work_per_ray.sh > work.md
+# BINARIES: a folder holding prebuilt portable `spacebvh` and `spacebvh_work_per_ray` (a baseline's,
+# to count two builds on the same rays); without it the portable build in build-portable is made.
 # SIDE: the primary image side whose hits the diffuse rays start from (about SIDE^2 diffuse rays at most).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,10 +24,13 @@ side=${SIDE:-160}
 [ -f "$scene" ] || [[ "$scene" == builtin:* ]] || { echo "no $scene: nothing to measure" >&2; exit 0; }
 command -v valgrind > /dev/null || { echo "valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
 
-cmake -S . -B build-portable -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=OFF > /dev/null
-cmake --build build-portable --target spacebvh_cli spacebvh_work_per_ray -j "$(nproc)" > /dev/null
-cli=build-portable/spacebvh
-bench=build-portable/spacebvh_work_per_ray
+binaries=${BINARIES:-build-portable}
+if [ -z "${BINARIES:-}" ]; then
+    cmake -S . -B build-portable -DCMAKE_BUILD_TYPE=Release -DSPACEBVH_NATIVE=OFF > /dev/null
+    cmake --build build-portable --target spacebvh_cli spacebvh_work_per_ray -j "$(nproc)" > /dev/null
+fi
+cli=$binaries/spacebvh
+bench=$binaries/spacebvh_work_per_ray
 out=${BENCH_OUT:-bench/out}/work_per_ray
 mkdir -p "$out"
 transform=()

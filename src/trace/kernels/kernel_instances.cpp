@@ -7,8 +7,10 @@
 // wider target is allowed.
 #include <immintrin.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "trace/kernels/kernels.hpp"
 #include "trace/leaf_tests/moller_filter.hpp"

@@ -9,6 +9,32 @@
 // order, returns their number), and kScalarTriangles (test leaf triangles one at a time with the scalar test, for the
 // reference kernel). No lambdas here: they would not inherit the target of the pragma region.
 
+// Where, in bytes from the first plane of a node's SoA boxes (planes kStride bytes apart: x low, x
+// high, y low, ...), the planes are that a ray enters and leaves through, per octant (bit k of the
+// index: the direction is negative along axis k, and the ray enters through the upper plane). Looked
+// up once per ray: every node test adds them to the node's address as they are, where plane indices
+// would cost a shift each, and the set-up is one address instead of a dozen bit operations per axis.
+struct PlaneOffsets {
+    uint32_t entry[3], exit[3];
+};
+template <size_t kStride>
+inline constexpr std::array<PlaneOffsets, 8> kOctantPlaneOffsets = [] {
+    std::array<PlaneOffsets, 8> table{};
+    for (uint32_t octant = 0; octant < 8; ++octant)
+        for (uint32_t axis = 0; axis < 3; ++axis) {
+            const uint32_t negative = (octant >> axis) & 1u;
+            table[octant].entry[axis] = uint32_t((2 * axis + negative) * kStride);
+            table[octant].exit[axis] = uint32_t((2 * axis + 1 - negative) * kStride);
+        }
+    return table;
+}();
+
+// The plane `offset` bytes from `first` (kOctantPlaneOffsets).
+template <class T>
+[[gnu::always_inline]] inline const T* plane_at(const T* first, uint32_t offset) {
+    return reinterpret_cast<const T*>(reinterpret_cast<const char*>(first) + offset);
+}
+
 // Per-ray constants of the single-ray box test, and which plane of a node's SoA boxes the ray enters
 // through (the lower one for a positive direction) and which it leaves through.
 // kFused: the fused slab constants of each axis (traversal_common.hpp, FusedSlabs: why the test stays
@@ -17,38 +43,41 @@
 // subtract-multiply test: there (p - o) * (1/d) with 1/d = +-inf is +-inf on the side of the slab the
 // origin is not on, and NaN (bound unchanged) on a plane through it, so the axis still culls every box
 // whose slab misses the origin; the fused constants of such an axis would cull nothing.
-template <class S, bool kFused>
+// kStride: the bytes from one plane of a node's boxes to the next.
+template <class S, bool kFused, size_t kStride>
 struct RayBoxes {
     typename S::F entry_scale[3], entry_offset[3], exit_scale[3], exit_offset[3];  // kFused
     typename S::F org[3], inv_dir[3];                                              // !kFused
-    int entry_plane[3], exit_plane[3];
+    const PlaneOffsets* planes;
 
     RayBoxes(const Ray& ray, const FusedSlabs& slabs) {
+        unsigned octant = slabs.negative;
         for (int axis = 0; axis < 3; ++axis) {
-            bool negative;
             if constexpr (kFused) {
                 entry_scale[axis] = S::set1(FusedSlabs::lane(slabs.entry_scale, axis));
                 entry_offset[axis] = S::set1(FusedSlabs::lane(slabs.entry_offset, axis));
                 exit_scale[axis] = S::set1(FusedSlabs::lane(slabs.exit_scale, axis));
                 exit_offset[axis] = S::set1(FusedSlabs::lane(slabs.exit_offset, axis));
-                negative = (slabs.negative >> axis) & 1u;
             } else {
                 org[axis] = S::set1(ray.org[axis]);
                 inv_dir[axis] = S::set1(1.0f / ray.dir[axis]);
-                negative = std::signbit(ray.dir[axis]);  // the sign of 1/d, -0 included
             }
-            entry_plane[axis] = 2 * axis + (negative ? 1 : 0);
-            exit_plane[axis] = 2 * axis + (negative ? 0 : 1);
         }
+        // Not fused: the sign of 1/d, -0 included (FusedSlabs::negative clears lane 0 of a ray without
+        // finite constants).
+        if constexpr (!kFused)
+            octant = unsigned(std::signbit(ray.dir[0])) | unsigned(std::signbit(ray.dir[1])) << 1 |
+                     unsigned(std::signbit(ray.dir[2])) << 2;
+        planes = &kOctantPlaneOffsets<kStride>[octant];
     }
 };
 
 // The slab distances of one axis from the planes the ray enters and leaves through: fused, or (p - o)
 // * (1/d), whose exit distances the caller widens by kFarScale (Ize 2013, as the packet kernel).
-template <class S, bool kFused>
+template <class S, bool kFused, size_t kStride>
 [[gnu::always_inline]] inline void slab_distances(typename S::F entry_planes, typename S::F exit_planes,
-                                                  const RayBoxes<S, kFused>& ray, int axis, typename S::F& t_entry,
-                                                  typename S::F& t_exit) {
+                                                  const RayBoxes<S, kFused, kStride>& ray, int axis,
+                                                  typename S::F& t_entry, typename S::F& t_exit) {
     if constexpr (kFused) {
         t_entry = S::fmsub(entry_planes, ray.entry_scale[axis], ray.entry_offset[axis]);
         t_exit = S::fmsub(exit_planes, ray.exit_scale[axis], ray.exit_offset[axis]);
@@ -60,24 +89,25 @@ template <class S, bool kFused>
 
 // The mask of the children entered: near <= far, the far distance widened where the test is not fused.
 template <class S, bool kFused>
-[[gnu::always_inline]] inline unsigned entered_mask(typename S::F near, typename S::F far, float tmax) {
+[[gnu::always_inline]] inline unsigned entered_mask(typename S::F near, typename S::F far, typename S::F tmax) {
     if constexpr (kFused) return S::hit_mask(near, far);
-    return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), S::set1(tmax)));
+    return S::hit_mask(near, S::min(S::mul(far, S::set1(kFarScale)), tmax));
 }
 
 // Tests all child boxes of `node` for a single ray (RayBoxes): returns the mask of the children entered
-// within [tmin, tmax] (bit = slot) and sets `near` to every lane's entry distance. A NaN slab distance
+// within [tmin, tmax] (broadcast; bit = slot) and sets `near` to every lane's entry distance. A NaN slab distance
 // (0 * inf: a plane through the origin on an axis the ray does not move along, or an empty slot there)
 // leaves the running bound unchanged, by the operand order of min and max.
-template <class S, bool kFused>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node, const RayBoxes<S, kFused>& ray,
-                                                      float tmin, float tmax, typename S::F& near) {
-    near = S::set1(tmin);
-    typename S::F far = S::set1(tmax);
+template <class S, bool kFused, size_t kStride>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const WideNode<S::kLanes>& node,
+                                                      const RayBoxes<S, kFused, kStride>& ray, typename S::F tmin,
+                                                      typename S::F tmax, typename S::F& near) {
+    near = tmin;
+    typename S::F far = tmax;
     for (int axis = 0; axis < 3; ++axis) {
         typename S::F t_entry, t_exit;
-        slab_distances<S, kFused>(S::load(node.planes[ray.entry_plane[axis]]),
-                                  S::load(node.planes[ray.exit_plane[axis]]), ray, axis, t_entry, t_exit);
+        slab_distances(S::load(plane_at(node.planes[0], ray.planes->entry[axis])),
+                       S::load(plane_at(node.planes[0], ray.planes->exit[axis])), ray, axis, t_entry, t_exit);
         near = S::max(t_entry, near);
         far = S::min(t_exit, far);
     }
@@ -88,17 +118,20 @@ template <class S, bool kFused>
 // checked it, fma(float(code), scale, origin) rounded once, so the decoded box contains the child's
 // float box and the slab test on it stays conservative. Slots without a child are masked off.
 // Needs the policy's load_u8 (eight codes to floats) and fmadd (8-wide policies only).
-template <class S, bool kFused>
-[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node, const RayBoxes<S, kFused>& ray,
-                                                      float tmin, float tmax, typename S::F& near) {
-    near = S::set1(tmin);
-    typename S::F far = S::set1(tmax);
+template <class S, bool kFused, size_t kStride>
+[[gnu::always_inline]] inline unsigned child_hit_mask(const QuantizedNode8& node,
+                                                      const RayBoxes<S, kFused, kStride>& ray, typename S::F tmin,
+                                                      typename S::F tmax, typename S::F& near) {
+    near = tmin;
+    typename S::F far = tmax;
     for (int axis = 0; axis < 3; ++axis) {
         const typename S::F scale = S::set1(node.scale[axis]), origin = S::set1(node.origin[axis]);
-        const typename S::F entry_plane = S::fmadd(S::load_u8(node.q[ray.entry_plane[axis]]), scale, origin);
-        const typename S::F exit_plane = S::fmadd(S::load_u8(node.q[ray.exit_plane[axis]]), scale, origin);
+        const typename S::F entry_plane =
+            S::fmadd(S::load_u8(plane_at(node.q[0], ray.planes->entry[axis])), scale, origin);
+        const typename S::F exit_plane =
+            S::fmadd(S::load_u8(plane_at(node.q[0], ray.planes->exit[axis])), scale, origin);
         typename S::F t_entry, t_exit;
-        slab_distances<S, kFused>(entry_plane, exit_plane, ray, axis, t_entry, t_exit);
+        slab_distances(entry_plane, exit_plane, ray, axis, t_entry, t_exit);
         near = S::max(t_entry, near);
         far = S::min(t_exit, far);
     }
@@ -212,6 +245,15 @@ template <int W, class Node>
     return {node.child[lane], node.count[lane], entry[lane]};
 }
 
+// The bytes between two planes of a node's boxes: float planes, or a quantized node's codes.
+template <class Node>
+constexpr size_t plane_stride() {
+    if constexpr (requires(const Node& node) { node.planes[0]; })
+        return sizeof(std::declval<const Node&>().planes[0]);
+    else
+        return sizeof(std::declval<const Node&>().q[0]);
+}
+
 // Closest hit (kAnyHit = false) or any hit. Children a ray enters are visited nearest first; entries
 // on the stack keep their entry distance, so a subtree entered beyond the closest hit found since is
 // skipped when popped. kMoller: leaves take the moller leaf test (moller_filter.hpp) on layout.planes.
@@ -220,7 +262,7 @@ template <class S, bool kAnyHit, bool kStats, bool kMoller, bool kFused, class L
 bool walk(const Layout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hit, TraversalStats* stats) {
     constexpr int W = S::kLanes;
     using Node = typename decltype(layout.nodes)::value_type;
-    const RayBoxes<S, kFused> boxes(ray, slabs);
+    const RayBoxes<S, kFused, plane_stride<Node>()> boxes(ray, slabs);
     // Kept in locals: the compiler cannot tell that the writes to `hit` leave them alone, and would
     // load them from memory at every node of a closest-hit walk.
     const Node* const nodes = layout.nodes.data();
@@ -228,12 +270,15 @@ bool walk(const Layout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hi
     const PackPlanes* const planes = kMoller ? layout.planes.data() : nullptr;
     const std::conditional_t<kMoller, MollerRay, NoMollerRay> moller(ray);
     const float tmin = ray.tmin;
+    // The ray's interval broadcast once (tmax again after a leaf shortens it), not at every node.
+    const typename S::F tmin_lanes = S::set1(tmin);
     // The triangle test's per-ray constants (three divisions) are made when the ray reaches its first
     // leaf: many rays (random rays around a small object) never do.
     WatertightRay shear;
     PackRay pack_ray;
     bool sheared = false;
     float tmax = ray.tmax;
+    typename S::F tmax_lanes = S::set1(tmax);
     bool found = false;
 
     // Each node visited pushes at most W - 1 entries and the depth is at most 1024 (build options).
@@ -247,7 +292,7 @@ bool walk(const Layout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hi
             if constexpr (kStats)
                 for (int slot = 0; slot < W; ++slot) stats->nodes_visited += node.used(slot);
             typename S::F near;
-            unsigned mask = child_hit_mask<S, kFused>(node, boxes, tmin, tmax, near);
+            unsigned mask = child_hit_mask<S, kFused>(node, boxes, tmin_lanes, tmax_lanes, near);
             if (mask != 0) {
                 // As Embree's single-ray traversal does: the entered children straight from the mask;
                 // for the closest hit, one is followed at once (most nodes enter one), two are compared
@@ -316,6 +361,7 @@ bool walk(const Layout& layout, const Ray& ray, const FusedSlabs& slabs, Hit& hi
                                                   found, stats))
                     return true;
             }
+            if constexpr (!kAnyHit) tmax_lanes = S::set1(tmax);
         }
         // Pop the nearest pending subtree that may still hold a closer hit.
         do {
