@@ -15,17 +15,13 @@ builds are timed apart from the queries; each query is timed three times, the me
 """
 
 import argparse
-import os
 import statistics
 import time
-from pathlib import Path
 
 import numpy as np
+from shared_scenes import SCENES
 
 import spacebvh
-
-ROOT = Path(__file__).resolve().parent.parent
-SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
 
 
 def median_seconds(function, *args, repeats=3):
