@@ -158,8 +158,8 @@ def from_the_surface(args):
             ("test_occlusions", as_numpy(scene.test_occlusions(r)) != np.isfinite(exact_t)),
             ("count_intersections", as_numpy(scene.count_intersections(r)) != crossings),
         ]
-        for label, wrong in checks:
-            print(f"  {library:8s} {label:26s} {int(np.sum(wrong)):5d}   {sets.by_kind(kinds, wrong)}")
+        for label, bad in checks:
+            print(f"  {library:8s} {label:26s} {int(np.sum(bad)):5d}   {sets.by_kind(kinds, bad)}")
     points = np.unique(origins, axis=0)
     their = o3d.core.Tensor(points)
     distance = (as_numpy(ours.compute_distance(points)), theirs.compute_distance(their).numpy())
