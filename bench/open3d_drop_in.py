@@ -14,11 +14,15 @@ whose exact answers are known by construction:
   vertices and edge lines: 2 crossings each, and the first contact at the face (cast_rays, t exact);
   rays running in the planes of faces and along the box's edges: a contact (cast_rays hits);
 - points on a lattice through the box's grid: on the surface, a distance of 0; inside or outside,
-  occupancy and the sign of the signed distance.
+  occupancy and the sign of the signed distance;
+- rays whose origins lie exactly on a closed box's surface (triangle interiors, edges, vertices;
+  directions off the surface and along it, tnear = 0), against the Python tests' Fraction references
+  (bench/hostile_sets.py): the first contact's t and triangle, occlusion and crossing counts, by kind;
+  and those origins as points on the surface (distance 0, the closest point the point itself).
 
     python bench/open3d_drop_in.py [--count 1000000] [--threads 2] [--repeat 3] [--scenes bunny crytek_sponza]
 
-Needs open3d-cpu (pip install "spacebvh[open3d]").
+Needs open3d-cpu (pip install ".[bench]").
 """
 
 import argparse

@@ -137,7 +137,7 @@ namespace {
 
 // The winding number that decides the sign: the hierarchical one (Taylor order 2) where it lies
 // farther from one half than its error bound or than 0.25, the direct sum otherwise. The bound is
-// rigorous but loose (about a hundred times the error seen, docs/distance.md): alone it would send most
+// rigorous but loose (hundreds of times the error seen, docs/distance.md): alone it would send most
 // points near a surface to the direct sum; the margin of 0.25 is fifty times the largest error measured.
 bool inside_by_winding(const WindingTree& tree, std::span<const Triangle> triangles, D3 p) {
     const auto [w, bound] = tree.hierarchical(triangles, p, kDefaultWindingAccuracy, kMaxWindingOrder);
