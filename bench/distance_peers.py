@@ -2,30 +2,31 @@
 """spacebvh's point queries against Open3D's RaycastingScene and libigl: the same points, one run.
 
 Not a test: it times closest points, distance and signed distance on the bunny and crytek_sponza from
-the shared scenes ($SPACEBVH_SCENES, default ../shared/scenes beside the checkout), prints points per
-second and the ratios, then counts each library's wrong answers against ours (exact nearest triangle,
-docs/distance.md) on hostile sets: a lattice through a subdivided box's faces, edges and vertices,
-and points on the surfaces. Needs `pip install open3d-cpu==0.20.0 libigl==2.6.3` (Open3D also needs
-Debian's libusb-1.0-0 and libgomp1) and spacebvh in the same environment.
+the shared scenes ($SPACEBVH_SCENES, default ../shared/scenes beside the checkout) and prints points per
+second and the ratios. Then it counts each library's wrong answers (ours included) against the exact
+reference of the Python tests (Fractions over every float32 triangle) on hostile sets: a lattice
+through a subdivided box's faces, edges and vertices, the same rotated, and points exactly on a closed
+box's surface (inside triangles, on edges, at vertices); and, where that reference is too slow,
+points on the bunny's surface against ours. Needs `pip install ".[bench]"` (open3d-cpu 0.20.0,
+libigl 2.6.3; Open3D also needs Debian's libusb-1.0-0 and libgomp1).
 
-    python bench/distance_peers.py [--points 1000000] [--threads 2] [--scenes bunny crytek_sponza]
+    python bench/distance_peers.py [--points 1000000] [--threads 2] [--scenes bunny crytek_sponza] [--hostile-only]
 
 Points: uniform in the scene's bounding box grown by a tenth on each side (seeded). Tree and scene
 builds are timed apart from the queries; each query is timed three times, the median printed.
 """
 
 import argparse
-import os
 import statistics
 import time
-from pathlib import Path
+from fractions import Fraction
 
+import hostile_sets as sets
 import numpy as np
+from shared_scenes import SCENES
+from test_distance import wrong_against_reference
 
 import spacebvh
-
-ROOT = Path(__file__).resolve().parent.parent
-SCENES = Path(os.environ.get("SPACEBVH_SCENES") or ROOT.parent / "shared" / "scenes")
 
 
 def median_seconds(function, *args, repeats=3):
@@ -121,24 +122,46 @@ def time_scene(name, count, threads):
         print(line, flush=True)
 
 
-def wrong_answers(name, vertices, faces, points, threads):
-    """Each library's answers that differ from ours: distance beyond 1e-6 of the mesh's size, or the
-    other side (signed distance of a point off the surface)."""
+def wrong_answers(name, vertices, faces, points, threads, inside):
+    """Each library's wrong answers against the exact reference of the Python tests (test_distance.py:
+    the squared distance to every float32 triangle in Fractions, the nearest with ties to the smaller
+    id): a distance beyond 1e-6 of the mesh's size from the exact one, or a point off the surface on
+    the wrong side (`inside`: by construction). Ours is checked by that reference's own rule (nearest
+    triangle and the documented error bound)."""
+    vertices = vertices.astype(np.float32).astype(np.float64)
+    # float32 in: our triangles are then exactly the reference's (a float64 mesh is taken into a frame
+    # about its centre before rounding, docs/float64.md).
     scene = spacebvh.mesh(vertices.astype(np.float32), faces)
     queries = spacebvh.DistanceQueries(spacebvh.build(scene, "spatial"), threads=threads)
-    exact = queries.distance(points)
-    signed = queries.signed_distance(points)
+    triangles = [tuple(tuple(Fraction(float(c)) for c in vertices[v]) for v in f) for f in faces]
+    exact_d2 = []
+    ours_wrong = len(wrong_against_reference(queries, triangles, points, exact_d2))
+    exact = np.sqrt(np.array([float(d2) for d2 in exact_d2]))
     tolerance = 1e-6 * float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
-    peers = Peers(vertices.astype(np.float32).astype(np.float64), faces, threads)
     off = exact > tolerance
+    ours_sign = int(np.sum(off & ((queries.signed_distance(points) < 0) != inside)))
+    peers = Peers(vertices, faces, threads)
+    line = f"  {name:28s} spacebvh {ours_wrong:5d} {ours_sign:5d}"
     for library in ("open3d", "libigl"):
         answer = getattr(peers, library)
-        distance = np.abs(answer("distance", points) - exact) > tolerance
-        other_side = off & (np.sign(answer("signed", points)) != np.sign(signed))
-        print(
-            f"  {name:24s} {library:7s} distance wrong {int(distance.sum()):6d}, sign wrong "
-            f"{int(other_side.sum()):6d} of {len(points)}"
-        )
+        distance = int(np.sum(np.abs(answer("distance", points) - exact) > tolerance))
+        sign = int(np.sum(off & ((answer("signed", points) < 0) != inside)))
+        line += f"   {library} {distance:5d} {sign:5d}"
+    print(f"{line}   of {len(points)} ({int(np.sum(~off))} on the surface)", flush=True)
+
+
+def against_ours(name, vertices, faces, points, threads):
+    """Where the Fraction reference is too slow (large meshes): each library's distances that differ
+    from ours (exact nearest triangle, checked above and in the tests) beyond 1e-6 of the mesh's size."""
+    queries = spacebvh.DistanceQueries(spacebvh.build(spacebvh.mesh(vertices, faces), "spatial"), threads=threads)
+    ours = queries.distance(points)
+    tolerance = 1e-6 * float(np.max(vertices.max(axis=0) - vertices.min(axis=0)))
+    peers = Peers(vertices, faces, threads)
+    counts = "   ".join(
+        f"{library} {int(np.sum(np.abs(getattr(peers, library)('distance', points) - ours) > tolerance)):5d}"
+        for library in ("open3d", "libigl")
+    )
+    print(f"  {name:28s} distance differs from ours: {counts}   of {len(points)}")
 
 
 def main():
@@ -146,14 +169,26 @@ def main():
     parser.add_argument("--points", type=int, default=1_000_000)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    parser.add_argument("--lattice-step", type=int, default=3, help="every n-th lattice point (the reference is slow)")
+    parser.add_argument("--hostile-only", action="store_true", help="only the wrong answers, no timings")
     args = parser.parse_args()
-    for name in args.scenes:
+    for name in [] if args.hostile_only else args.scenes:
         time_scene(name, args.points, args.threads)
-    print("wrong answers against ours (exact nearest triangle):")
+    print(
+        "wrong answers against the exact reference (Fractions, every triangle): distance, sign of points off the "
+        "surface; libraries in turn"
+    )
     vertices, faces, lattice = grid_box(3)
-    wrong_answers("box lattice", vertices, faces, lattice, args.threads)
+    lattice = lattice[:: args.lattice_step]
+    inside = np.all((lattice > 0) & (lattice < 6), axis=1)
+    wrong_answers("box lattice", vertices, faces, lattice, args.threads, inside)
     rotation = np.linalg.qr(np.random.default_rng(2).normal(size=(3, 3)))[0]
-    wrong_answers("rotated box lattice", vertices @ rotation.T, faces, lattice @ rotation.T, args.threads)
+    wrong_answers("rotated box lattice", vertices @ rotation.T, faces, lattice @ rotation.T, args.threads, inside)
+    # Points exactly on a closed box's surface: inside triangles, on edges (grid lines, diagonals) and
+    # at vertices, the box's edges and corners included (the origins of bench/hostile_sets.py's rays).
+    vertices, faces, origins = sets.surface_rays(3)[:3]
+    points = np.unique(origins.astype(np.float64), axis=0)
+    wrong_answers("box surface points", vertices, faces, points, args.threads, np.zeros(len(points), dtype=bool))
     if (SCENES / "bunny" / "bunny.obj").exists():
         scene = spacebvh.load_scene(str(SCENES / "bunny" / "bunny.obj"))
         v, f = indexed_mesh(scene)
@@ -162,7 +197,7 @@ def main():
         u = rng.uniform(0, 1, (20000, 1))
         w = rng.uniform(0, 1, (20000, 1)) * (1 - u)
         on_surface = tri[:, 0] + u * (tri[:, 1] - tri[:, 0]) + w * (tri[:, 2] - tri[:, 0])
-        wrong_answers("bunny surface points", v, f, on_surface, args.threads)
+        against_ours("bunny surface points", v, f, on_surface, args.threads)
 
 
 if __name__ == "__main__":

@@ -14,19 +14,24 @@ whose exact answers are known by construction:
   vertices and edge lines: 2 crossings each, and the first contact at the face (cast_rays, t exact);
   rays running in the planes of faces and along the box's edges: a contact (cast_rays hits);
 - points on a lattice through the box's grid: on the surface, a distance of 0; inside or outside,
-  occupancy and the sign of the signed distance.
+  occupancy and the sign of the signed distance;
+- rays whose origins lie exactly on a closed box's surface (triangle interiors, edges, vertices;
+  directions off the surface and along it, tnear = 0), against the Python tests' Fraction references
+  (bench/hostile_sets.py): the first contact's t and triangle, occlusion and crossing counts, by kind;
+  and those origins as points on the surface (distance 0, the closest point the point itself).
 
     python bench/open3d_drop_in.py [--count 1000000] [--threads 2] [--repeat 3] [--scenes bunny crytek_sponza]
 
-Needs open3d-cpu (pip install "spacebvh[open3d]").
+Needs open3d-cpu (pip install ".[bench]").
 """
 
 import argparse
 import time
 
+import hostile_sets as sets
 import numpy as np
 import open3d as o3d
-from shared_scenes import SCENES, read_obj
+from shared_scenes import each_scene
 
 import spacebvh
 from spacebvh.open3d import RaycastingScene
@@ -55,12 +60,7 @@ def queries():
 
 def speed(args):
     rows = []
-    for name in args.scenes:
-        path = SCENES / name / f"{name}.obj"
-        if not path.exists():
-            print(f"skipping {name}: no {path}")
-            continue
-        vertices, faces = read_obj(path, np.float32)
+    for name, vertices, faces in each_scene(args.scenes, np.float32):
         ours, theirs = scenes_of(vertices, faces)
         rng = np.random.default_rng(1)
         lo, hi = vertices.min(axis=0), vertices.max(axis=0)
@@ -91,103 +91,24 @@ def speed(args):
     return rows
 
 
-def icosphere(subdivisions=3):
-    """A unit icosphere (vertices, faces), rotated off the axes, and its edges."""
-    g = (1 + 5**0.5) / 2
-    v = [[-1, g, 0], [1, g, 0], [-1, -g, 0], [1, -g, 0], [0, -1, g], [0, 1, g], [0, -1, -g], [0, 1, -g]]
-    v += [[g, 0, -1], [g, 0, 1], [-g, 0, -1], [-g, 0, 1]]
-    f = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2]]
-    f += [[10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11]]
-    f += [[6, 2, 10], [8, 6, 7], [9, 8, 1]]
-    vertices = [np.array(p, dtype=float) / np.linalg.norm(p) for p in v]
-    faces = f
-    for _ in range(subdivisions):
-        faces = subdivided(vertices, faces)
-    angle = np.radians([17.0, 31.0, 47.0])
-    rx = np.array([[1, 0, 0], [0, np.cos(angle[0]), -np.sin(angle[0])], [0, np.sin(angle[0]), np.cos(angle[0])]])
-    rz = np.array([[np.cos(angle[2]), -np.sin(angle[2]), 0], [np.sin(angle[2]), np.cos(angle[2]), 0], [0, 0, 1]])
-    vertices = (np.array(vertices) @ (rz @ rx).T).astype(np.float32)
-    faces = np.array(faces, dtype=np.int64)
-    edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
-    return vertices, faces, edges
-
-
-def subdivided(vertices, faces):
-    """Each triangle split in four, the new vertices (appended to ``vertices``) on the unit sphere."""
-    middle, next_faces = {}, []
-
-    def mid(a, b):
-        key = (min(a, b), max(a, b))
-        if key not in middle:
-            p = vertices[a] + vertices[b]
-            vertices.append(p / np.linalg.norm(p))
-            middle[key] = len(vertices) - 1
-        return middle[key]
-
-    for a, b, c in faces:
-        ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-        next_faces += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-    return next_faces
-
-
-def grid_box(n):
-    """The unit box, each face an n x n grid of squares split into two triangles (float32)."""
-    vertices, faces = [], []
-    for axis in range(3):
-        u, v = [a for a in range(3) if a != axis]
-        for side in (0.0, 1.0):
-            base = len(vertices)
-            for i in range(n + 1):
-                for j in range(n + 1):
-                    p = [0.0, 0.0, 0.0]
-                    p[axis], p[u], p[v] = side, i / n, j / n
-                    vertices.append(p)
-            for i in range(n):
-                for j in range(n):
-                    a, b = base + i * (n + 1) + j, base + (i + 1) * (n + 1) + j
-                    quad = [a, b, b + 1, a + 1] if side == 1.0 else [a, a + 1, b + 1, b]
-                    faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
-    vertices = np.array(vertices, dtype=np.float32)
-    unique, inverse = np.unique(vertices, axis=0, return_inverse=True)
-    return unique, inverse.reshape(-1)[np.array(faces)].astype(np.int64)
-
-
 def wrong(label, ours, theirs, expected):
     """Prints how many of each library's answers differ from the exact ones."""
     mine, open3d = np.sum(np.asarray(ours) != expected), np.sum(np.asarray(theirs) != expected)
     print(f"  {label:58s} open3d {open3d:6d}   spacebvh {mine:6d}   of {np.size(ours)}")
 
 
-def axis_rays(n):
-    """Rays along each axis from both sides through the grid box: (rays, interior) where interior
-    marks rays through interior grid lines (2 crossings, first contact at t = 1) and the rest run in the
-    planes of faces or along the box's edges (a contact at t = 1 all the same)."""
-    rays, interior = [], []
-    for axis in range(3):
-        u, v = [a for a in range(3) if a != axis]
-        for sign in (1.0, -1.0):
-            for i in range(n + 1):
-                for j in range(n + 1):
-                    ray = [0.0] * 6
-                    ray[axis], ray[3 + axis] = (-1.0 if sign > 0 else 2.0), sign
-                    ray[u], ray[v] = i / n, j / n
-                    rays.append(ray)
-                    interior.append(0 < i < n and 0 < j < n)
-    return np.array(rays, dtype=np.float32), np.array(interior)
-
-
 def hostile(args):
     print("\nwrong answers on hostile sets (exact answers by construction)")
-    vertices, faces, edges = icosphere()
+    vertices, faces, edges = sets.icosphere()
     ours, theirs = scenes_of(vertices, faces)
     targets = np.vstack([vertices, (vertices[edges[:, 0]] + vertices[edges[:, 1]]) / 2]).astype(np.float32)
     rays = np.hstack([3 * targets, -targets]).astype(np.float32)
     label = f"icosphere ({len(faces)} tris): count_intersections, rays at vertices/edges"
     wrong(label, ours.count_intersections(rays), theirs.count_intersections(o3d.core.Tensor(rays)).numpy(), 2)
 
-    vertices, faces = grid_box(args.grid)
+    vertices, faces = sets.unit_grid_box(args.grid)
     ours, theirs = scenes_of(vertices, faces)
-    rays, interior = axis_rays(args.grid)
+    rays, interior = sets.axis_rays(args.grid)
     their = o3d.core.Tensor(rays)
     counts = (ours.count_intersections(rays), theirs.count_intersections(their).numpy())
     wrong(
@@ -216,6 +137,46 @@ def hostile(args):
     wrong("grid box: compute_signed_distance < 0, lattice points", *(s < 0 for s in signed), inside)
 
 
+def from_the_surface(args):
+    """Rays from exact points of a closed box's surface, and those points, against the Fraction reference."""
+    vertices, faces, origins, directions, kinds = sets.surface_rays(args.surface_grid)
+    exact_t, nearest, crossings = sets.exact_answers(vertices, faces, origins, directions)
+    size = float(np.max(vertices) - np.min(vertices))
+    print(
+        f"\nrays from the surface of a closed box ({len(faces)} tris, {len(origins)} rays, tnear = 0), wrong against "
+        "the exact reference (Fractions, every triangle), by origin and direction:"
+    )
+    ours, theirs = scenes_of(vertices, faces)
+    rays = np.hstack([origins, directions])
+
+    def as_numpy(x):  # spacebvh.open3d answers in Open3D tensors when open3d is installed, as here
+        return x.numpy() if hasattr(x, "numpy") else np.asarray(x)
+
+    for library, scene, r in (("open3d", theirs, o3d.core.Tensor(rays)), ("spacebvh", ours, rays)):
+        cast = scene.cast_rays(r)
+        t = as_numpy(cast["t_hit"])
+        ids = np.where(np.isfinite(t), as_numpy(cast["primitive_ids"]).astype(np.int64), -1)
+        checks = [
+            ("cast_rays t_hit (contact)", sets.wrong_first_t(t, exact_t, size)),
+            ("cast_rays primitive_ids", sets.wrong_first_triangle(ids, nearest)),
+            ("test_occlusions", as_numpy(scene.test_occlusions(r)) != np.isfinite(exact_t)),
+            ("count_intersections", as_numpy(scene.count_intersections(r)) != crossings),
+        ]
+        for label, bad in checks:
+            print(f"  {library:8s} {label:26s} {int(np.sum(bad)):5d}   {sets.by_kind(kinds, bad)}")
+    points = np.unique(origins, axis=0)
+    their = o3d.core.Tensor(points)
+    distance = (as_numpy(ours.compute_distance(points)), theirs.compute_distance(their).numpy())
+    wrong(f"closed box: compute_distance == 0, {len(points)} ray origins on the surface", *distance, 0.0)
+    closest = (
+        as_numpy(ours.compute_closest_points(points)["points"]),
+        theirs.compute_closest_points(their)["points"].numpy(),
+    )
+    wrong(
+        "closed box: compute_closest_points is the point itself", *(np.all(c == points, axis=1) for c in closest), True
+    )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=1_000_000, help="rays and points per query")
@@ -223,12 +184,17 @@ def main():
     parser.add_argument("--repeat", type=int, default=3, help="runs of each query pair; medians are printed")
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
     parser.add_argument("--grid", type=int, default=8, help="squares per box edge in the hostile sets")
+    parser.add_argument("--surface-grid", type=int, default=3, help="quads per box edge for the rays from the surface")
+    parser.add_argument("--hostile-only", action="store_true", help="only the wrong answers, no timings")
     args = parser.parse_args()
     print(
         f"open3d {o3d.__version__}, spacebvh {spacebvh.__version__} (kernels: {', '.join(spacebvh.kernels()[:3])}...)"
     )
-    rows = speed(args)
+    rows = [] if args.hostile_only else speed(args)
     hostile(args)
+    from_the_surface(args)
+    if not rows:
+        return
     print("\nscene           query                     open3d s  spacebvh s  open3d / spacebvh")
     for name, label, theirs, ours in rows:
         print(f"{name:15s} {label:24s} {theirs:9.3f} {ours:11.3f} {theirs / ours:10.2f}x")

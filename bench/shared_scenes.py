@@ -23,3 +23,14 @@ def read_obj(path, dtype=np.float64):
                 faces.append([int(corner.split("/")[0]) for corner in line.split()[1:4]])
     faces = np.array(faces, dtype=np.int64)
     return np.array(vertices, dtype=dtype), np.where(faces > 0, faces - 1, faces + len(vertices))
+
+
+def each_scene(names, dtype=np.float64):
+    """(name, vertices, faces) of each named scene of the collection, in turn; a scene that is not there
+    is skipped with a line that says so, so that a run on a partial collection measures what it has."""
+    for name in names:
+        path = SCENES / name / f"{name}.obj"
+        if not path.exists():
+            print(f"skipping {name}: no {path}")
+            continue
+        yield (name, *read_obj(path, dtype))

@@ -18,10 +18,12 @@ if command -v ccache >/dev/null; then
 fi
 start=$SECONDS
 # The developers' install: -march=native, Embree (EmbreeTracer, Embree's trees) and the command-line
-# tool, which the self-contained wheel (pyproject.toml's defaults, scripts/test-wheel.sh) leaves out.
+# tool, which the self-contained wheel (pyproject.toml's defaults, scripts/test-wheel.sh) leaves out;
+# with the tests' optional packages and the benchmark scripts' peers (the `bench` extra), so that this
+# environment runs every script in bench/ too.
 developer=(-C cmake.define.SPACEBVH_NATIVE=ON -C cmake.define.SPACEBVH_WITH_EMBREE=ON -C cmake.define.SPACEBVH_BUILD_APPS=ON)
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -C build-dir=build-pip "${developer[@]}" \
-  ".[test,trimesh-tests,open3d-tests,reproduce]"
+  ".[test,trimesh-tests,open3d-tests,reproduce,bench]"
 echo "pip install . took $((SECONDS - start)) s"
 rm -rf build-pip
 # Outside the repository, so that only the installed package can be imported.

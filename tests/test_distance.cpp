@@ -305,6 +305,34 @@ TEST(Distance, BoxSignsOccupancyAndWindingNumbers) {
     EXPECT_GT(checked, 1000u);
 }
 
+// The far field to Taylor order 0, 1 and 2 on an open box (winding numbers strictly between 0 and 1
+// inside): each value within its bound of the direct sum (itself within its own bound), and the
+// total error falling with the order (a single point's need not).
+TEST(Distance, HierarchicalWindingNumbersWithinTheirBounds) {
+    std::vector<Triangle> box = grid_box(3);   // [0, 6]^3
+    box.erase(box.begin(), box.begin() + 18);  // without the face x = 0
+    const DistanceQueries queries(box, build_for(box, "binned"));
+    double total[3] = {0.0, 0.0, 0.0};
+    size_t checked = 0;
+    for (const Vec3d& p : box_lattice(3)) {
+        if (queries.distance(p) == 0.0) continue;
+        const auto [direct, direct_bound] = queries.winding_number_bound(p);
+        ASSERT_LT(direct_bound, 1e-9);
+        for (int order = 0; order <= 2; ++order) {
+            const auto [w, bound] = queries.winding_number_bound(p, 2.0, order);
+            EXPECT_EQ(w, queries.winding_number(p, 2.0, order));
+            EXPECT_LE(std::fabs(w - direct), bound + direct_bound) << order;
+            total[order] += std::fabs(w - direct);
+        }
+        ++checked;
+    }
+    EXPECT_GT(checked, 4000u);
+    EXPECT_LT(total[2], total[1]);
+    EXPECT_LT(total[1], total[0]);
+    EXPECT_THROW(queries.winding_number({0, 0, 0}, 2.0, 3), Error);
+    EXPECT_THROW(queries.winding_number({0, 0, 0}, 2.0, -1), Error);
+}
+
 TEST(Distance, MaxDistanceIsInclusiveAndExact) {
     const std::vector<Triangle> box = grid_box(2);
     const DistanceQueries queries(box, build_for(box, "binned"));

@@ -42,6 +42,8 @@ enum class SignRule { parity, winding };
 // Barill et al.'s default accuracy of the hierarchical winding number (a cluster of triangles is
 // approximated when the point lies beyond accuracy times its radius).
 inline constexpr double kDefaultWindingAccuracy = 2.0;
+// The default Taylor order of the hierarchical winding number's far field (0 the dipole, up to 2).
+inline constexpr int kDefaultWindingOrder = 2;
 
 // The queries over one mesh, from its triangles and any BVH over them; keeps its own copy of what it
 // needs. Thread-safe (every query is const); batches run across the calling thread's oneTBB arena and
@@ -62,12 +64,15 @@ public:
     // The distance, negative inside. A point on the surface has distance +0.
     double signed_distance(const Vec3d& point, SignRule rule = SignRule::parity) const;
     // The generalized winding number: 1 inside a closed, outward-oriented mesh, 0 outside. accuracy 0:
-    // the direct sum over every triangle (error within winding_number_bound); accuracy > 0: Barill et
-    // al.'s hierarchical approximation with that parameter (beta).
-    double winding_number(const Vec3d& point, double accuracy = 0.0) const;
-    // The direct sum and its error bound (docs/distance.md): {value, bound}; the bound is infinite for
-    // a point on the surface, where the winding number jumps.
-    std::pair<double, double> winding_number_bound(const Vec3d& point) const;
+    // the direct sum over every triangle; accuracy > 0: Barill et al.'s hierarchical approximation
+    // with that parameter (beta), each far cluster of triangles replaced by its expansion to Taylor
+    // order `order` (0 the dipole, 1, or 2) about its centre.
+    double winding_number(const Vec3d& point, double accuracy = 0.0, int order = kDefaultWindingOrder) const;
+    // The same and a bound on its error (docs/distance.md): {value, bound}. The bound is infinite for a
+    // point on a triangle the sum takes directly, where the winding number jumps, and for a cluster
+    // seen from within its radius (accuracy <= 1).
+    std::pair<double, double> winding_number_bound(const Vec3d& point, double accuracy = 0.0,
+                                                   int order = kDefaultWindingOrder) const;
     // Containment by exact parity (RayQueries::contains) of the point rounded to float.
     bool occupancy(const Vec3d& point) const;
 
@@ -76,7 +81,8 @@ public:
                         double max_distance = kInfinity64) const;
     void distances(std::span<const Vec3d> points, std::span<double> out, double max_distance = kInfinity64) const;
     void signed_distances(std::span<const Vec3d> points, std::span<double> out, SignRule rule = SignRule::parity) const;
-    void winding_numbers(std::span<const Vec3d> points, std::span<double> out, double accuracy = 0.0) const;
+    void winding_numbers(std::span<const Vec3d> points, std::span<double> out, double accuracy = 0.0,
+                         int order = kDefaultWindingOrder) const;
     void occupancies(std::span<const Vec3d> points, std::span<uint8_t> out) const;
 
     static constexpr double kInfinity64 = std::numeric_limits<double>::infinity();

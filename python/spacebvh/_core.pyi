@@ -493,10 +493,27 @@ class DistanceQueries:
         points: typing.Any,
         accuracy: typing.SupportsFloat | typing.SupportsIndex = 0.0,
         *,
+        order: typing.SupportsInt | typing.SupportsIndex = 2,
         threads: typing.SupportsInt | typing.SupportsIndex | None = None,
     ) -> numpy.typing.NDArray[numpy.float64]:
         """
-        The generalized winding number: accuracy 0 the direct sum over every triangle (within the bound of docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs).
+        The generalized winding number: accuracy 0 the direct sum over every triangle (within the bound of docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs), each far cluster of triangles replaced by its expansion to Taylor order `order` (0 the dipole, 1, 2).
+        """
+    def winding_number_bound(
+        self,
+        points: typing.Any,
+        accuracy: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+        *,
+        order: typing.SupportsInt | typing.SupportsIndex = 2,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+        """
+        winding_number's values and a bound on their error: (value, bound), float64 of the leading shape. The bound covers rounding and, for accuracy > 0, the far field's truncation (docs/distance.md). On an edge or vertex it covers the jump of the winding number there (>= 1/2, or infinite); it is infinite where a cluster is taken from within its radius (possible for accuracy <= 1).
+        """
+    @property
+    def scene(self) -> Scene:
+        """
+        The scene queried.
         """
     @property
     def threads(self) -> int:

@@ -56,6 +56,44 @@ inline void check_threads(int threads) {
     if (threads < 0) throw Error("threads must be >= 0 (0 = every core), not " + std::to_string(threads));
 }
 
+// An object of a query class over one tree (RayQueries, DistanceQueries): the scene with its frame,
+// the queries made from the tree, and the default thread limit of batch calls.
+template <class Queries>
+struct PyQueryObject {
+    PyScene scene;
+    std::shared_ptr<const Queries> queries;
+    int threads = 0;
+
+    // A call's `threads` argument, or the default where it is None.
+    int threads_for(std::optional<int> threads_arg) const { return threads_arg ? *threads_arg : threads; }
+};
+
+// The class `name` over PyQueryObject<Queries>: made from a tree and a default thread limit (Queries
+// made from the tree's triangles without the GIL), with the read-only properties `scene` and `threads`.
+template <class Queries>
+py::class_<PyQueryObject<Queries>> bind_query_class(py::module_& m, const char* name, const char* doc) {
+    using Object = PyQueryObject<Queries>;
+    py::class_<Object> bound(m, name, doc);
+    bound
+        .def(py::init([](const PyBvh& tree, int threads) {
+                 check_threads(threads);
+                 std::shared_ptr<const Queries> queries;
+                 {
+                     py::gil_scoped_release unlocked;
+                     queries = std::make_shared<const Queries>(tree.scene.scene->triangles, *tree.bvh);
+                 }
+                 return Object{tree.scene, std::move(queries), threads};
+             }),
+             py::arg("bvh"), py::arg("threads") = 0,
+             "Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).")
+        .def_property_readonly(
+            "scene", [](const Object& self) { return self.scene; }, "The scene queried.")
+        .def_property_readonly(
+            "threads", [](const Object& self) { return self.threads; },
+            "The default thread limit of batch calls (0 = every core).");
+    return bound;
+}
+
 // The calling thread's arena of `threads` oneTBB threads (0: the default, every core), made on the
 // thread's first call with that count and kept for the thread's life. An arena made and destroyed on
 // every call, from several Python threads at once, makes the process grow without bound

@@ -2,9 +2,9 @@
 // Point queries (include/spacebvh/distance.hpp) on NumPy points of any leading shape (..., 3): the
 // closest point, unsigned and signed distance, generalized winding numbers and occupancy. Answers
 // are shaped by the points' leading shape; the GIL is released while the library works.
-#include <atomic>
 #include <cmath>
 #include <optional>
+#include <tuple>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -16,11 +16,7 @@ namespace spacebvh::python {
 
 namespace {
 
-struct PyDistance {
-    PyScene scene;
-    std::shared_ptr<const DistanceQueries> queries;
-    int threads = 0;
-};
+using PyDistance = PyQueryObject<DistanceQueries>;
 
 // Points of shape (..., 3) as rows in the scene's frame (double, not rounded), with their leading
 // shape. Checked finite in blocks across the threads; the first row that is not is named.
@@ -42,23 +38,11 @@ Points read_points(const PyDistance& self, const py::handle& object, int threads
     points.rows.resize(rows.rows());
     const Frame& frame = self.scene.frame;
     without_gil(threads, [&] {
-        std::atomic<size_t> first_bad{points.rows.size()};
-        rows.visit([&](auto read) {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.rows.size(), 1 << 14),
-                              [&](const tbb::blocked_range<size_t>& range) {
-                                  for (size_t i = range.begin(); i < range.end(); ++i)
-                                      for (int axis = 0; axis < 3; ++axis) {
-                                          const double value = read(i, axis);
-                                          if (!std::isfinite(value)) {
-                                              size_t seen = first_bad.load();
-                                              while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
-                                          }
-                                          points.rows[i][size_t(axis)] = value - frame.origin[size_t(axis)];
-                                      }
-                              });
-        });
-        if (first_bad.load() != points.rows.size())
-            throw Error("points: point " + std::to_string(first_bad.load()) + " (in row-major order) is not finite");
+        const size_t bad = read_finite_points(
+            rows, std::span<Vec3d>(points.rows),
+            [&](Vec3d& point, int axis, double value) { point[size_t(axis)] = value - frame.origin[size_t(axis)]; });
+        if (bad != points.rows.size())
+            throw Error("points: point " + std::to_string(bad) + " (in row-major order) is not finite");
     });
     return points;
 }
@@ -68,11 +52,9 @@ std::vector<py::ssize_t> with_tail(std::vector<py::ssize_t> shape, py::ssize_t t
     return shape;
 }
 
-int threads_for(const PyDistance& self, std::optional<int> threads) { return threads ? *threads : self.threads; }
-
 py::dict closest_points(const PyDistance& self, const py::handle& points_arg, double max_distance,
                         std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const Points points = read_points(self, points_arg, threads);
     const size_t n = points.rows.size();
     std::vector<ClosestPoint> found(n);
@@ -113,7 +95,7 @@ py::dict closest_points(const PyDistance& self, const py::handle& points_arg, do
 template <class Work>
 py::array_t<double> per_point(const PyDistance& self, const py::handle& points_arg, std::optional<int> threads_arg,
                               Work&& work) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const Points points = read_points(self, points_arg, threads);
     py::array_t<double> out(points.shape);
     double* data = out.mutable_data();
@@ -130,26 +112,12 @@ SignRule sign_rule(const std::string& sign) {
 }  // namespace
 
 void bind_distance(py::module_& m) {
-    py::class_<PyDistance>(
+    bind_query_class<DistanceQueries>(
         m, "DistanceQueries",
         "Point queries over a tree: the closest point (the nearest triangle decided exactly, ties to the smaller id), "
         "unsigned and signed distance, generalized winding numbers and occupancy (docs/distance.md). Points are any "
         "array of shape (..., 3), float32 or float64, in the scene's coordinates; answers have the points' leading "
         "shape. Degenerate triangles are ignored. Batch calls release the GIL.")
-        .def(py::init([](const PyBvh& tree, int threads) {
-                 check_threads(threads);
-                 std::shared_ptr<const DistanceQueries> queries;
-                 {
-                     py::gil_scoped_release unlocked;
-                     queries = std::make_shared<const DistanceQueries>(tree.scene.scene->triangles, *tree.bvh);
-                 }
-                 return PyDistance{tree.scene, std::move(queries), threads};
-             }),
-             py::arg("bvh"), py::arg("threads") = 0,
-             "Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).")
-        .def_property_readonly(
-            "threads", [](const PyDistance& self) { return self.threads; },
-            "The default thread limit of batch calls (0 = every core).")
         .def("closest_points", &closest_points, py::arg("points"), py::arg("max_distance") = kInfinity, py::kw_only(),
              py::arg("threads") = py::none(),
              "The nearest point of the mesh within max_distance (inclusive) of each point: a dict of 'points' (..., 3) "
@@ -179,18 +147,45 @@ void bind_distance(py::module_& m) {
             "sign='winding' by the generalized winding number (inside where >= 0.5).")
         .def(
             "winding_number",
-            [](const PyDistance& self, const py::handle& points, double accuracy, std::optional<int> threads) {
+            [](const PyDistance& self, const py::handle& points, double accuracy, int order,
+               std::optional<int> threads) {
                 return per_point(self, points, threads, [&](std::span<const Vec3d> rows, std::span<double> out) {
-                    self.queries->winding_numbers(rows, out, accuracy);
+                    self.queries->winding_numbers(rows, out, accuracy, order);
                 });
             },
-            py::arg("points"), py::arg("accuracy") = 0.0, py::kw_only(), py::arg("threads") = py::none(),
+            py::arg("points"), py::arg("accuracy") = 0.0, py::kw_only(), py::arg("order") = kDefaultWindingOrder,
+            py::arg("threads") = py::none(),
             "The generalized winding number: accuracy 0 the direct sum over every triangle (within the bound of "
-            "docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs).")
+            "docs/distance.md), accuracy > 0 Barill et al.'s hierarchical approximation with that beta (2 is theirs), "
+            "each far cluster of triangles replaced by its expansion to Taylor order `order` (0 the dipole, 1, 2).")
+        .def(
+            "winding_number_bound",
+            [](const PyDistance& self, const py::handle& points_arg, double accuracy, int order,
+               std::optional<int> threads_arg) {
+                const int threads = self.threads_for(threads_arg);
+                const Points points = read_points(self, points_arg, threads);
+                py::array_t<double> value(points.shape), bound(points.shape);
+                double *v_out = value.mutable_data(), *b_out = bound.mutable_data();
+                without_gil(threads, [&] {
+                    tbb::parallel_for(tbb::blocked_range<size_t>(0, points.rows.size(), 256),
+                                      [&](const tbb::blocked_range<size_t>& range) {
+                                          for (size_t i = range.begin(); i < range.end(); ++i)
+                                              std::tie(v_out[i], b_out[i]) =
+                                                  self.queries->winding_number_bound(points.rows[i], accuracy, order);
+                                      });
+                });
+                return py::make_tuple(value, bound);
+            },
+            py::arg("points"), py::arg("accuracy") = 0.0, py::kw_only(), py::arg("order") = kDefaultWindingOrder,
+            py::arg("threads") = py::none(),
+            "winding_number's values and a bound on their error: (value, bound), float64 of the leading shape. The "
+            "bound covers rounding and, for accuracy > 0, the far field's truncation (docs/distance.md). On an edge or "
+            "vertex it covers the jump of the winding number there (>= 1/2, or infinite); it is infinite where a "
+            "cluster is taken from within its radius (possible for accuracy <= 1).")
         .def(
             "occupancy",
             [](const PyDistance& self, const py::handle& points_arg, std::optional<int> threads_arg) {
-                const int threads = threads_for(self, threads_arg);
+                const int threads = self.threads_for(threads_arg);
                 const Points points = read_points(self, points_arg, threads);
                 std::vector<uint8_t> inside(points.rows.size());
                 without_gil(threads, [&] { self.queries->occupancies(points.rows, inside); });

@@ -5,7 +5,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <atomic>
 #include <cmath>
 
 #include "bindings.hpp"
@@ -183,18 +182,10 @@ std::vector<Ray> make_rays(const Frame& frame, const RealRows& origins, const Re
                            const PerRay& tmax) {
     const size_t n = ray_count(origins, directions);
     std::vector<Ray> rays(n);
-    std::atomic<size_t> first_bad{n};
     origins.visit([&](const auto& o) {
         directions.visit([&](const auto& d) {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& range) {
-                for (size_t i = range.begin(); i < range.end(); ++i) {
-                    if (ray_at(frame, o, d, tmin, tmax, i, rays[i]) == nullptr) continue;
-                    size_t seen = first_bad.load();
-                    while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
-                    break;  // later rays of this range cannot be the first bad one
-                }
-            });
-            const size_t bad = first_bad.load();
+            const size_t bad = first_failing(
+                n, 4096, [&](size_t i) { return ray_at(frame, o, d, tmin, tmax, i, rays[i]) == nullptr; });
             if (bad == n) return;
             Ray& ray = rays[bad];
             const char* reason = ray_at(frame, o, d, tmin, tmax, bad, ray);

@@ -6,8 +6,12 @@
 #pragma once
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <array>
+#include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -107,6 +111,41 @@ private:
     py::ssize_t stride_ = 0;
     bool float64_ = false;
 };
+
+// The lowest index i in [0, n) for which passes(i) is false, or n where it holds for all: passes runs
+// on the indices in blocks of `grain` across the threads of the calling arena (call without the GIL),
+// each block stopping at its first failure (its later indices cannot be the lowest). The answer is the
+// same whatever the thread count, so that an error names the same row on every run.
+template <typename Passes>
+size_t first_failing(size_t n, size_t grain, Passes&& passes) {
+    std::atomic<size_t> first{n};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i < range.end(); ++i) {
+            if (passes(i)) continue;
+            size_t seen = first.load();
+            while (i < seen && !first.compare_exchange_weak(seen, i)) {}
+            break;
+        }
+    });
+    return first.load();
+}
+
+// Reads the points `rows` into `out` (as many), each coordinate by put(out[i], axis, value), across
+// the threads of the calling arena (call without the GIL). Returns the lowest index of a row with a
+// coordinate that is not finite (whose point is then left partly written), or out.size().
+template <typename Point, typename Put>
+size_t read_finite_points(const RealRows& rows, std::span<Point> out, Put&& put) {
+    return rows.visit([&](auto read) {
+        return first_failing(out.size(), size_t(1) << 14, [&](size_t i) {
+            for (int axis = 0; axis < 3; ++axis) {
+                const double value = read(i, axis);
+                if (!std::isfinite(value)) return false;
+                put(out[i], axis, value);
+            }
+            return true;
+        });
+    });
+}
 
 // The number of rays that origins and directions describe: both have k rows, or one of them a single
 // row broadcast to the other's k. Throws Error naming both otherwise.

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // Exact multi-hit queries (include/spacebvh/queries.hpp) on NumPy rays: every crossing, crossing
 // counts, first and any crossing, and containment, each crossing of a surface reported once.
-#include <atomic>
 #include <optional>
 
 #include <pybind11/stl.h>
@@ -15,13 +14,7 @@ namespace spacebvh::python {
 
 namespace {
 
-struct PyQueries {
-    PyScene scene;
-    std::shared_ptr<const RayQueries> queries;
-    int threads = 0;
-};
-
-int threads_for(const PyQueries& self, std::optional<int> threads) { return threads ? *threads : self.threads; }
+using PyQueries = PyQueryObject<RayQueries>;
 
 // Points of hits in the caller's frame, float64 (computed in double from the triangle).
 void put_point(const Frame& frame, const QueryHit& hit, double* out) {
@@ -30,7 +23,7 @@ void put_point(const Frame& frame, const QueryHit& hit, double* out) {
 
 py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                      const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<QueryHit> hits(rays.size());
     without_gil(threads, [&] { self.queries->first_hits(rays, hits); });
@@ -61,7 +54,7 @@ py::tuple first_hits(const PyQueries& self, const py::handle& origins, const py:
 
 py::array_t<int64_t> first_primitives(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                                       const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     py::array_t<int64_t> primitive(py::ssize_t(rays.size()));
     int64_t* id_out = primitive.mutable_data();
@@ -79,7 +72,7 @@ py::array_t<int64_t> first_primitives(const PyQueries& self, const py::handle& o
 
 py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                            const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<uint8_t> answers(rays.size());
     without_gil(threads, [&] { self.queries->any_hits(rays, answers); });
@@ -89,7 +82,7 @@ py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, con
 py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                    const py::handle& tmin, const py::handle& tmax, std::optional<int64_t> max_hits, bool points_wanted,
                    bool details_wanted, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     if (max_hits && *max_hits < 0)
         throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
@@ -125,7 +118,7 @@ py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::h
 
 py::array_t<int64_t> count_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
                                 const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<uint32_t> counts(rays.size());
     without_gil(threads, [&] { self.queries->count_hits(rays, counts); });
@@ -136,32 +129,16 @@ py::array_t<int64_t> count_hits(const PyQueries& self, const py::handle& origins
 }
 
 py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, std::optional<int> threads_arg) {
-    const int threads = threads_for(self, threads_arg);
+    const int threads = self.threads_for(threads_arg);
     const RealRows rows = RealRows::from(points_arg, "points");
     std::vector<Vec3> points(rows.rows());
     std::vector<uint8_t> answers(points.size());
     const Frame& frame = self.scene.frame;
     without_gil(threads, [&] {
-        // In blocks across the threads; the first row that is not finite is the one named.
-        std::atomic<size_t> first_bad{points.size()};
-        rows.visit([&](auto read) {
-            tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1 << 14),
-                              [&](const tbb::blocked_range<size_t>& range) {
-                                  for (size_t i = range.begin(); i < range.end(); ++i) {
-                                      for (int axis = 0; axis < 3; ++axis) {
-                                          const double value = read(i, axis);
-                                          if (!std::isfinite(value)) {
-                                              size_t seen = first_bad.load();
-                                              while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
-                                              return;
-                                          }
-                                          points[i][axis] = frame.to_local(value, axis);
-                                      }
-                                  }
-                              });
+        const size_t bad = read_finite_points(rows, std::span<Vec3>(points), [&](Vec3& point, int axis, double value) {
+            point[axis] = frame.to_local(value, axis);
         });
-        if (first_bad.load() != points.size())
-            throw Error("points: row " + std::to_string(first_bad.load()) + " is not finite");
+        if (bad != points.size()) throw Error("points: row " + std::to_string(bad) + " is not finite");
         self.queries->contains(points, answers);
     });
     return answers_as_array(answers);
@@ -174,28 +151,12 @@ constexpr const char* kRaysDoc =
 }  // namespace
 
 void bind_queries(py::module_& m) {
-    py::class_<PyQueries>(
+    bind_query_class<RayQueries>(
         m, "RayQueries",
         "Exact queries beyond the closest hit over a tree: every crossing of each ray (sorted by t), "
         "crossing counts, the first and any crossing, and point containment by parity. A ray through a "
         "shared edge or vertex of a connected surface crosses it once: the answers are those of the ray "
         "moved sideways by a fixed infinitesimal amount (docs/queries.md). Batch calls release the GIL.")
-        .def(py::init([](const PyBvh& tree, int threads) {
-                 check_threads(threads);
-                 std::shared_ptr<const RayQueries> queries;
-                 {
-                     py::gil_scoped_release unlocked;
-                     queries = std::make_shared<const RayQueries>(tree.scene.scene->triangles, *tree.bvh);
-                 }
-                 return PyQueries{tree.scene, std::move(queries), threads};
-             }),
-             py::arg("bvh"), py::arg("threads") = 0,
-             "Queries over the tree `bvh` (spacebvh.build). `threads`: the default thread limit (0 = every core).")
-        .def_property_readonly(
-            "scene", [](const PyQueries& self) { return self.scene; }, "The scene queried.")
-        .def_property_readonly(
-            "threads", [](const PyQueries& self) { return self.threads; },
-            "The default thread limit of batch calls (0 = every core).")
         .def(
             "first", &first_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
