@@ -73,15 +73,21 @@ TEST_P(TracerRefit, RefittedLayoutAnswersAsTheArbiterOnTheMovedMesh) {
     const std::vector<Triangle> before = organic(1500);
     const float size = length(bounds_of(before).extent());
     Bvh bvh = build(MeshView(before), TreeRecipe::for_builder(builder));
-    Tracer tracer(MeshView(before), bvh, parse_kernel(kernel));
+    TracerConfig refittable = parse_kernel(kernel);
+    refittable.keep_refit_map = true;
+    Tracer tracer(MeshView(before), bvh, refittable);
+    Tracer plain(MeshView(before), bvh, parse_kernel(kernel));  // no refit map: refit lays it out again
+    const bool float_wide = kernel.rfind("bvh", 0) == 0 && kernel.rfind("bvh8q", 0) != 0;
+    if (float_wide) EXPECT_GT(tracer.memory_bytes(), plain.memory_bytes()) << "the map is counted";
     const std::vector<Triangle> after = moved(before, kind, size);
     refit_boxes(bvh, after);
     const bool in_place = tracer.refit(MeshView(after), bvh);
-    const bool float_wide = kernel.rfind("bvh", 0) == 0 && kernel.rfind("bvh8q", 0) != 0;
     EXPECT_EQ(in_place, float_wide) << kernel;
+    EXPECT_FALSE(plain.refit(MeshView(after), bvh)) << kernel;
     const std::vector<Ray> rays = tools::generate_random_rays(bounds_of(after), 250, 4);
     size_t hits = 0;
     EXPECT_EQ(wrong_answers(tracer, after, rays, size, &hits), 0u);
+    EXPECT_EQ(wrong_answers(plain, after, rays, size), 0u);
     EXPECT_GT(hits, 20u);
 }
 
@@ -97,7 +103,9 @@ TEST(TracerRefit, DegeneracyChangesMakeANewLayout) {
     const float size = length(bounds_of(before).extent());
     before[7] = {before[7].v0, before[7].v0, before[7].v1};  // degenerate at build: no layout stores it
     Bvh bvh = build(MeshView(before), TreeRecipe::for_builder("spatial"));
-    Tracer tracer(MeshView(before), bvh, parse_kernel("bvh8"));
+    TracerConfig refittable = parse_kernel("bvh8");
+    refittable.keep_refit_map = true;
+    Tracer tracer(MeshView(before), bvh, refittable);
     std::vector<Triangle> after = before;
     after[7].v1 = organic(800)[7].v1;  // opens up
     after[3] = {after[3].v0, after[3].v0, after[3].v0};

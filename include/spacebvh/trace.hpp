@@ -95,6 +95,10 @@ struct TracerConfig {
     uint32_t packet_size = 0;  // packet kernels: rays per packet, 1..256; 0 = the kernel's tile (64, 256)
     LeafTest leaf_test = LeafTest::watertight;  // bvh4 and bvh8 only
     NodeFormat node_format = NodeFormat::full;  // bvh8 only
+    // bvh4 and bvh8 (full nodes): keep, per child slot, the binary node its box came from (4 bytes
+    // a slot, counted in memory_bytes()), so that refit() updates the boxes in place; without it
+    // refit() lays the tree out again. RenderScene keeps it for its meshes.
+    bool keep_refit_map = false;
 };
 
 const char* to_string(Kernel kernel);          // "bvh8"
@@ -130,8 +134,8 @@ public:
 
     // After the mesh's vertices moved (same triangles, same count) and `bvh`, the tree this tracer was
     // made from, had its boxes recomputed for them (same topology): the 4- and 8-wide layouts with float
-    // nodes are updated in place (vertices and boxes read again, nodes and leaf packing kept), the
-    // others made again from `bvh`, as is any layout where a triangle became or stopped being
+    // nodes made with TracerConfig::keep_refit_map are updated in place (vertices and boxes read again, nodes and leaf
+    // packing kept), the others made again from `bvh`, as is any layout where a triangle became or stopped being
     // degenerate. Answers are then exact for the moved mesh. Returns whether it was done in place.
     // Throws Error as the constructor does for a tree that does not belong to the mesh.
     bool refit(const MeshView& mesh, const Bvh& bvh);

@@ -134,6 +134,7 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
                         "'");
         const auto add_planes = [&](auto& layout) {
             if (config.leaf_test == LeafTest::moller) layout.planes = trace::make_pack_planes(layout.packs);
+            if (!config.keep_refit_map) std::vector<uint32_t>().swap(layout.source);
         };
         if (width == 4) {
             add_planes(impl_->layout.emplace<1>(trace::collapse_to_wide<4>(store.triangles(), bvh, config.collapse)));
@@ -252,9 +253,14 @@ size_t Tracer::memory_bytes() const {
             if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
                 return layout.buffer.size() * sizeof(layout.buffer[0]);
             else
-                return layout.nodes.size() * sizeof(layout.nodes[0]) +
-                       layout.packs.size() * sizeof(trace::TrianglePack) +
-                       layout.planes.size() * sizeof(trace::PackPlanes);
+                else if constexpr (std::is_same_v<std::decay_t<decltype(layout)>,
+                                                  trace::QuantizedLayout8>) return layout.nodes.size() *
+                        sizeof(layout.nodes[0]) +
+                    layout.packs.size() * sizeof(trace::TrianglePack) +
+                    layout.planes.size() * sizeof(trace::PackPlanes);
+            else return layout.nodes.size() * sizeof(layout.nodes[0]) +
+                layout.packs.size() * sizeof(trace::TrianglePack) + layout.planes.size() * sizeof(trace::PackPlanes) +
+                layout.source.size() * sizeof(uint32_t);
         },
         impl_->layout);
 }

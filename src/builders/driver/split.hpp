@@ -41,9 +41,12 @@ struct ObjectBinning {
 
     uint32_t bin_of(float centroid) const {
         const float position = (centroid - origin) * scale;
-        // Clamp in float first: a NaN-free value in [0, bins - 1] converts safely.
-        const float clamped = std::min(std::max(position, 0.0f), float(bins - 1));
-        return uint32_t(clamped);
+        // Clamped as the finder's MAXPS/MINPS clamp it, so both put every centroid in the same bin:
+        // a NaN position (an infinite difference times a zero scale, on a node spanning more than
+        // FLT_MAX) goes to bin 0, where std::max would keep the NaN.
+        const float lower = position > 0.0f ? position : 0.0f;
+        const float last = float(bins - 1);
+        return uint32_t(lower < last ? lower : last);
     }
 };
 

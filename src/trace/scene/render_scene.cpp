@@ -94,7 +94,9 @@ uint32_t RenderScene::Impl::add_mesh(MeshRecord record, uint32_t mask) {
     const uint32_t id = next_id(geometries, name);
     record.duplicates = record.bvh.primitives.size() > record.triangles.size();
     record.extent = scene::extent_of(record.bvh.root().bounds);
-    record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, config.tracer);
+    TracerConfig tracer = config.tracer;
+    tracer.keep_refit_map = true;  // meshes of a scene are refitted in place
+    record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, tracer);
     geometries.push_back({mask, std::move(record)});
     committed = false;
     return id;
