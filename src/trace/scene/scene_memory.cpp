@@ -17,9 +17,9 @@ namespace {
 constexpr uint64_t kKeptPerReference = sizeof(BvhNode) + sizeof(uint32_t) + 192;
 
 // The top level per instance: its record, its box and padding, its leaf in the binary tree (two nodes
-// per item with one item per leaf) and its id, and a share of the 4-wide collapse.
+// per item with one item per leaf) and its id, and a share of the 8-wide collapse (at most one node per two).
 constexpr uint64_t kKeptPerInstance = sizeof(scene::Geometry) + sizeof(scene::TopLevelItem) + sizeof(uint32_t) +
-                                      2 * sizeof(BvhNode) + sizeof(uint32_t) + sizeof(scene::TopNode4) / 2;
+                                      2 * sizeof(BvhNode) + sizeof(uint32_t) + sizeof(scene::TopNode) / 2;
 constexpr uint64_t kKeptPerScene = 4096;  // the scene object, its name and small vectors
 
 }  // namespace
