@@ -250,17 +250,17 @@ void Tracer::occluded(std::span<const Ray> rays, std::span<uint8_t> result, Trav
 size_t Tracer::memory_bytes() const {
     return std::visit(
         [](const auto& layout) -> size_t {
-            if constexpr (std::is_same_v<std::decay_t<decltype(layout)>, trace::BinaryLayout>)
+            using Layout = std::decay_t<decltype(layout)>;
+            if constexpr (std::is_same_v<Layout, trace::BinaryLayout>) {
                 return layout.buffer.size() * sizeof(layout.buffer[0]);
-            else
-                else if constexpr (std::is_same_v<std::decay_t<decltype(layout)>,
-                                                  trace::QuantizedLayout8>) return layout.nodes.size() *
-                        sizeof(layout.nodes[0]) +
-                    layout.packs.size() * sizeof(trace::TrianglePack) +
-                    layout.planes.size() * sizeof(trace::PackPlanes);
-            else return layout.nodes.size() * sizeof(layout.nodes[0]) +
-                layout.packs.size() * sizeof(trace::TrianglePack) + layout.planes.size() * sizeof(trace::PackPlanes) +
-                layout.source.size() * sizeof(uint32_t);
+            } else {
+                size_t bytes = layout.nodes.size() * sizeof(layout.nodes[0]) +
+                               layout.packs.size() * sizeof(trace::TrianglePack) +
+                               layout.planes.size() * sizeof(trace::PackPlanes);
+                if constexpr (!std::is_same_v<Layout, trace::QuantizedLayout8>)
+                    bytes += layout.source.size() * sizeof(uint32_t);  // the refit map, when kept
+                return bytes;
+            }
         },
         impl_->layout);
 }

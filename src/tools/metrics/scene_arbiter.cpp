@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "core/exact_triangle.hpp"
@@ -131,10 +132,13 @@ struct SceneArbiter::Impl {
         }
         return t0 <= t1 * (1.0 + 1e-12) + 1e-300;
     }
-    Ray local(size_t p, const Ray& ray) const {
+    // The ray in placement p's space; none where a level overflows float (no hit there, docs/scenes.md).
+    std::optional<Ray> local(size_t p, const Ray& ray) const {
         Ray r = ray;
-        for (size_t level = first_level[p]; level < first_level[p + 1]; ++level)
+        for (size_t level = first_level[p]; level < first_level[p + 1]; ++level) {
             r = scene::to_instance(inverse[level], r);
+            if (!scene::is_finite_ray(r)) return std::nullopt;
+        }
         return r;
     }
 };
@@ -197,10 +201,11 @@ PlacedHit SceneArbiter::closest_hit(const Ray& ray, uint32_t mask) const {
     PlacedHit best;
     for (size_t p = 0; p < s.placements.size(); ++p) {
         if (!s.placements[p].visible(mask) || !s.meets(p, ray)) continue;
-        const Ray local = s.local(p, ray);
+        const std::optional<Ray> local = s.local(p, ray);
+        if (!local) continue;
         const std::vector<Triangle>& triangles = s.meshes[s.placements[p].mesh].triangles;
         for (size_t i = 0; i < triangles.size(); ++i) {
-            const std::optional<double> t = intersect_triangle_exact(local, triangles[i]);
+            const std::optional<double> t = intersect_triangle_exact(*local, triangles[i]);
             if (t && *t < best_t) {  // strict: equal t keeps the lower placement and triangle
                 best_t = *t;
                 best = {{float(best_t), uint32_t(i)}, int64_t(p)};
@@ -214,9 +219,10 @@ bool SceneArbiter::occluded(const Ray& ray, uint32_t mask) const {
     const Impl& s = *impl_;
     for (size_t p = 0; p < s.placements.size(); ++p) {
         if (!s.placements[p].visible(mask) || !s.meets(p, ray)) continue;
-        const Ray local = s.local(p, ray);
+        const std::optional<Ray> local = s.local(p, ray);
+        if (!local) continue;
         for (const Triangle& tri : s.meshes[s.placements[p].mesh].triangles)
-            if (intersect_triangle_exact(local, tri)) return true;
+            if (intersect_triangle_exact(*local, tri)) return true;
     }
     return false;
 }

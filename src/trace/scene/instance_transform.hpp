@@ -55,4 +55,9 @@ inline Ray to_instance(const InstanceTransform& xf, const Ray& ray) {
     return out;
 }
 
+// A ray whose image in an instance's space overflows float (a world ray near FLT_MAX taken through
+// a scaling transform) cannot meet the instance's float triangles: the walks skip the instance. The
+// kernels need finite origins and directions (an infinite origin makes every slab distance NaN).
+inline bool is_finite_ray(const Ray& ray) { return is_finite(ray.org) && is_finite(ray.dir); }
+
 }  // namespace spacebvh::scene

@@ -144,7 +144,9 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
                 state.path[level] = id;
                 const Impl& child = *inst.scene->impl_;
                 const Ray local = scene::to_instance(inst.xf, bounded());
-                if (const auto [mesh, mesh_id] = child.only_mesh(); mesh) {
+                if (!scene::is_finite_ray(local)) {
+                    // no hit in this instance (docs/scenes.md)
+                } else if (const auto [mesh, mesh_id] = child.only_mesh(); mesh) {
                     if (child.geometries[mesh_id].mask & state.mask) mesh_closest(*mesh, mesh_id, local, state, best);
                 } else {
                     child.closest(local, state, level + 1, best);
@@ -168,7 +170,9 @@ bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t lev
                 const Impl& child = *inst.scene->impl_;
                 const Ray local = scene::to_instance(inst.xf, ray);
                 bool hit;
-                if (const auto [mesh, mesh_id] = child.only_mesh(); mesh)
+                if (!scene::is_finite_ray(local))
+                    hit = false;  // no hit in this instance (docs/scenes.md)
+                else if (const auto [mesh, mesh_id] = child.only_mesh(); mesh)
                     hit = (child.geometries[mesh_id].mask & state.mask) && mesh_occluded(*mesh, mesh_id, local, state);
                 else
                     hit = child.occluded(local, state, level + 1);
