@@ -78,7 +78,9 @@ TEST_P(TracerRefit, RefittedLayoutAnswersAsTheArbiterOnTheMovedMesh) {
     Tracer tracer(MeshView(before), bvh, refittable);
     Tracer plain(MeshView(before), bvh, parse_kernel(kernel));  // no refit map: refit lays it out again
     const bool float_wide = kernel.rfind("bvh", 0) == 0 && kernel.rfind("bvh8q", 0) != 0;
-    if (float_wide) EXPECT_GT(tracer.memory_bytes(), plain.memory_bytes()) << "the map is counted";
+    if (float_wide) {
+        EXPECT_GT(tracer.memory_bytes(), plain.memory_bytes()) << "the map is counted";
+    }
     const std::vector<Triangle> after = moved(before, kind, size);
     refit_boxes(bvh, after);
     const bool in_place = tracer.refit(MeshView(after), bvh);
