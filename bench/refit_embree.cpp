@@ -20,24 +20,14 @@
 #include "spacebvh/tools/metrics.hpp"
 #include "spacebvh/tools/rays.hpp"
 
+#include "bench_timing.hpp"
+
 using namespace spacebvh;
 
 namespace {
 
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-double median_ms(int runs, const std::function<void()>& work) {
-    std::vector<double> ms;
-    for (int r = 0; r < runs; ++r) {
-        const auto start = std::chrono::steady_clock::now();
-        work();
-        ms.push_back(ms_since(start));
-    }
-    std::sort(ms.begin(), ms.end());
-    return ms[ms.size() / 2];
-}
+using bench::median_ms;
+using bench::ms_since;
 
 // The mesh moved by `amount` (0 = not moved): rotating turns it about z by amount * 90 degrees;
 // bending adds amount * x^2 / size to y; exploding pushes each triangle out by amount * its centroid.

@@ -27,24 +27,14 @@
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/verify.hpp"
 
+#include "bench_timing.hpp"
+
 using namespace spacebvh;
 
 namespace {
 
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-double median_ms(int runs, const std::function<void()>& work) {
-    std::vector<double> ms;
-    for (int r = 0; r < runs; ++r) {
-        const auto start = std::chrono::steady_clock::now();
-        work();
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    }
-    std::sort(ms.begin(), ms.end());
-    return ms[ms.size() / 2];
-}
+using bench::median_ms;
+using bench::ms_since;
 
 // splitmix64 (docs/rays.md), for the placements.
 struct Random {

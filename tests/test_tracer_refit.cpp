@@ -114,7 +114,7 @@ TEST(TracerRefit, DegeneracyChangesMakeANewLayout) {
     refit_boxes(bvh, after);
     EXPECT_FALSE(tracer.refit(MeshView(after), bvh));
     std::vector<Ray> rays = tools::generate_random_rays(bounds_of(after), 150, 11);
-    for (int k : {3, 7}) {  // aimed at both changed triangles
+    for (int k : {3, 7}) {                   // aimed at both changed triangles
         const Triangle t = organic(800)[k];  // a copy: the vector is a temporary
         const Vec3 target = (t.v0 + t.v1 + t.v2) / 3.0f;
         rays.push_back(Ray{rays[k].org, target - rays[k].org, 0.0f, kInfinity});
