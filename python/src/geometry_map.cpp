@@ -45,22 +45,31 @@ struct GeometryMap {
 };
 
 GeometryMap make_map(const std::vector<int64_t>& counts, const py::handle& normals_arg) {
-    GeometryMap map;
+    const RealRows normals = RealRows::from(normals_arg, "normals");
+    uint64_t total = 0;
     for (size_t g = 0; g < counts.size(); ++g) {
         if (counts[g] < 0)
             throw Error("counts[" + std::to_string(g) + "] must be >= 0, not " + std::to_string(counts[g]));
+        total += uint64_t(counts[g]);
+        if (total > normals.rows())  // checked as it grows, so an absurd count fails before any work
+            throw Error("normals must have one row per triangle (sum(counts) >= " + std::to_string(total) + "), not " +
+                        std::to_string(normals.rows()));
+    }
+    if (total != normals.rows())
+        throw Error("normals must have one row per triangle (" + std::to_string(total) + "), not " +
+                    std::to_string(normals.rows()));
+    if (total >= kInvalidIndex) throw Error("a geometry map holds fewer than 2^32 - 1 triangles");
+    GeometryMap map;
+    map.geometry.reserve(total);
+    map.primitive.reserve(total);
+    for (size_t g = 0; g < counts.size(); ++g)
         for (int64_t p = 0; p < counts[g]; ++p) {
             map.geometry.push_back(uint32_t(g));
             map.primitive.push_back(uint32_t(p));
         }
-    }
-    const RealRows normals = RealRows::from(normals_arg, "normals");
-    if (normals.rows() != map.triangles())
-        throw Error("normals must have one row per triangle (" + std::to_string(map.triangles()) + "), not " +
-                    std::to_string(normals.rows()));
-    map.normals.resize(3 * map.triangles());
+    map.normals.resize(3 * total);
     normals.visit([&](auto read) {
-        for (size_t i = 0; i < map.triangles(); ++i)
+        for (size_t i = 0; i < total; ++i)
             for (int axis = 0; axis < 3; ++axis) map.normals[3 * i + size_t(axis)] = float(read(i, axis));
     });
     return map;
@@ -70,6 +79,10 @@ GeometryMap make_map(const std::vector<int64_t>& counts, const py::handle& norma
 std::vector<Ray> rays_from_rows(const Frame& frame, const py::handle& rows_arg, double tnear, double tfar,
                                 int threads) {
     const py::array rows = py::module_::import("numpy").attr("asarray")(rows_arg).cast<py::array>();
+    const char kind = rows.dtype().kind();
+    if (kind != 'f' && kind != 'i' && kind != 'u')
+        throw py::type_error("rays must be an array of real numbers (float32 or float64), not dtype " +
+                             py::str(rows.dtype()).cast<std::string>());
     if (rows.ndim() != 2 || rows.shape(1) != 6)
         throw Error("rays must have shape (k, 6) (origin, direction), not ndim " + std::to_string(rows.ndim()) +
                     (rows.ndim() == 2 ? " with " + std::to_string(rows.shape(1)) + " columns" : std::string()));

@@ -143,7 +143,7 @@ def test_bad_input_is_named():
         geometry_map.cast_rays(tracer, rays[:, :5])
     with pytest.raises(spacebvh.Error, match=r"rays must have shape \(k, 6\)"):
         geometry_map.list_intersections(queries, rays[0])
-    with pytest.raises(TypeError, match="must be an array of real numbers"):
+    with pytest.raises(TypeError, match="rays must be an array of real numbers"):
         geometry_map.count_intersections(queries, rays.astype(str))
     bad = rays.copy()
     bad[2, 4] = np.nan
@@ -156,7 +156,9 @@ def test_bad_input_is_named():
     with pytest.raises(spacebvh.Error, match="one row per triangle"):
         spacebvh.GeometryMap([12], np.zeros((11, 3), dtype=np.float32))
     with pytest.raises(spacebvh.Error, match=r"counts\[1\] must be >= 0"):
-        spacebvh.GeometryMap([13, -1], np.zeros((12, 3), dtype=np.float32))
+        spacebvh.GeometryMap([12, -1], np.zeros((12, 3), dtype=np.float32))
+    with pytest.raises(spacebvh.Error, match="one row per triangle"):
+        spacebvh.GeometryMap([10**15], np.zeros((12, 3), dtype=np.float32))
     smaller = spacebvh.GeometryMap([4], np.zeros((4, 3), dtype=np.float32))
     with pytest.raises(spacebvh.Error, match="over 12 triangles, the geometry map over 4"):
         smaller.cast_rays(tracer, rays)
