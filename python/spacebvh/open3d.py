@@ -256,9 +256,12 @@ class RaycastingScene:
     # -- points ----------------------------------------------------------------------------------
     def _points(self, query_points: Any, kind: str) -> tuple[np.ndarray, tuple[int, ...], Any]:
         rows, shape = _last_dim(query_points, 3, "query_points")
-        bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
-        if len(bad):
-            raise ValueError(f"query_points: point {bad[0]} is not finite: {rows[bad[0]]}")
+        # One sum settles the common case (a NaN or inf makes it NaN or inf; float32 values cannot
+        # overflow a float64 sum); the row is looked for only when it is not finite.
+        if not np.isfinite(rows.sum(dtype=np.float64)):
+            bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
+            if len(bad):
+                raise ValueError(f"query_points: point {bad[0]} is not finite: {rows[bad[0]]}")
         queries = self._query(kind)
         if queries is None:
             raise ValueError(f"the scene has no triangles: add_triangles() first ({len(self._geometries)} added)")
