@@ -25,8 +25,9 @@ whose exact answers are known by construction:
 Each query's line also gives the time of the general spacebvh call the drop-in rests on ("core":
 Tracer.intersect / occluded, RayQueries.count / all / contains, DistanceQueries on the same tree and
 inputs), so that the drop-in's own cost (drop-in / core) and the gap of the core to Open3D show apart.
---scenes takes any scene of the shared collection by name (NAME/NAME.obj), e.g. `--scenes bunny
-crytek_sponza living_room_3` for a large one (786,208 triangles).
+--queries times only the queries named (all by default). --scenes takes any scene of the shared
+collection by name (NAME/NAME.obj), e.g. `--scenes bunny crytek_sponza living_room_3` for a large one
+(786,208 triangles).
 
 Needs open3d-cpu (pip install ".[bench]").
 """
@@ -139,6 +140,8 @@ def speed(args):
             f"medians of {args.repeat}"
         )
         for label, call, core in queries():
+            if args.queries and label not in args.queries:
+                continue
             calls = [(call, theirs, their_rays, their_points), (call, ours, rays, points), (core, ours, rays, points)]
             runs = []
             for run in range(args.repeat):  # the three in turn, each run starting with the next one
@@ -247,6 +250,7 @@ def main():
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each query pair; medians are printed")
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    parser.add_argument("--queries", nargs="+", choices=[q[0] for q in queries()], help="time only these (default all)")
     parser.add_argument("--grid", type=int, default=8, help="squares per box edge in the hostile sets")
     parser.add_argument("--surface-grid", type=int, default=3, help="quads per box edge for the rays from the surface")
     parser.add_argument("--hostile-only", action="store_true", help="only the wrong answers, no timings")
