@@ -23,18 +23,27 @@ using namespace pybind11::literals;
 constexpr uint32_t kInvalidId = 0xFFFFFFFFu;  // Open3D's INVALID_ID, for misses
 
 struct GeometryMap {
-    std::vector<uint32_t> geometry, primitive;  // per combined triangle
-    std::vector<float> normals;                 // 3 per combined triangle
+    // What a hit on one combined triangle reports, kept together so that a hit reads one place.
+    struct Entry {
+        uint32_t geometry, primitive;
+        float normal[3];
+    };
+    std::vector<Entry> entries;  // per combined triangle
 
-    size_t triangles() const { return geometry.size(); }
+    size_t triangles() const { return entries.size(); }
 
     // Writes the ids and normal of combined triangle `triangle` (kInvalidIndex: a miss).
     void put(uint32_t triangle, uint32_t* geometry_out, uint32_t* primitive_out, float* normal_out) const {
-        const bool hit = triangle != kInvalidIndex;
-        *geometry_out = hit ? geometry[triangle] : kInvalidId;
-        *primitive_out = hit ? primitive[triangle] : kInvalidId;
-        if (normal_out == nullptr) return;
-        for (int axis = 0; axis < 3; ++axis) normal_out[axis] = hit ? normals[3 * size_t(triangle) + axis] : 0.0f;
+        if (triangle == kInvalidIndex) {
+            *geometry_out = *primitive_out = kInvalidId;
+            if (normal_out != nullptr) normal_out[0] = normal_out[1] = normal_out[2] = 0.0f;
+            return;
+        }
+        const Entry& entry = entries[triangle];
+        *geometry_out = entry.geometry;
+        *primitive_out = entry.primitive;
+        if (normal_out != nullptr)
+            for (int axis = 0; axis < 3; ++axis) normal_out[axis] = entry.normal[axis];
     }
 
     void check_size(size_t scene_triangles, const char* what) const {
@@ -60,17 +69,16 @@ GeometryMap make_map(const std::vector<int64_t>& counts, const py::handle& norma
                     std::to_string(normals.rows()));
     if (total >= kInvalidIndex) throw Error("a geometry map holds fewer than 2^32 - 1 triangles");
     GeometryMap map;
-    map.geometry.reserve(total);
-    map.primitive.reserve(total);
-    for (size_t g = 0; g < counts.size(); ++g)
-        for (int64_t p = 0; p < counts[g]; ++p) {
-            map.geometry.push_back(uint32_t(g));
-            map.primitive.push_back(uint32_t(p));
-        }
-    map.normals.resize(3 * total);
+    map.entries.resize(total);
     normals.visit([&](auto read) {
-        for (size_t i = 0; i < total; ++i)
-            for (int axis = 0; axis < 3; ++axis) map.normals[3 * i + size_t(axis)] = float(read(i, axis));
+        size_t i = 0;
+        for (size_t g = 0; g < counts.size(); ++g)
+            for (int64_t p = 0; p < counts[g]; ++p, ++i) {
+                GeometryMap::Entry& entry = map.entries[i];
+                entry.geometry = uint32_t(g);
+                entry.primitive = uint32_t(p);
+                for (int axis = 0; axis < 3; ++axis) entry.normal[axis] = float(read(i, axis));
+            }
     });
     return map;
 }
