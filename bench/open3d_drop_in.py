@@ -22,6 +22,13 @@ whose exact answers are known by construction:
 
     python bench/open3d_drop_in.py [--count 1000000] [--threads 2] [--repeat 3] [--scenes bunny crytek_sponza]
 
+Each query's line also gives the time of the general spacebvh call the drop-in rests on ("core":
+Tracer.intersect / occluded, RayQueries.count / all / contains, DistanceQueries on the same tree and
+inputs), so that the drop-in's own cost (drop-in / core) and the gap of the core to Open3D show apart.
+--queries times only the queries named (all by default). --scenes takes any scene of the shared
+collection by name (NAME/NAME.obj), e.g. `--scenes bunny crytek_sponza living_room_3` for a large one
+(786,208 triangles).
+
 Needs open3d-cpu (pip install ".[bench]").
 """
 
@@ -45,17 +52,73 @@ def scenes_of(vertices, faces):
 
 
 def queries():
-    """(label, call) of every query: call(scene, rays, points, threads)."""
+    """(label, call, core) of every query: call(scene, rays, points, threads) runs it on either class;
+    core(ours, rays, points, threads) runs the general spacebvh call it rests on (Tracer, RayQueries,
+    DistanceQueries on the same tree), so that the drop-in's own cost and the core's gap show apart."""
+
+    def o(r):
+        return r[:, :3]
+
+    def d(r):
+        return r[:, 3:]
+
+    def tracer(s):
+        return s._query("tracer")
+
+    def crossings(s):
+        return s._query("crossings")
+
+    def distance(s):
+        return s._query("distance")
+
     return [
-        ("cast_rays", lambda s, r, p, n: s.cast_rays(r, nthreads=n)),
-        ("test_occlusions", lambda s, r, p, n: s.test_occlusions(r, nthreads=n)),
-        ("count_intersections", lambda s, r, p, n: s.count_intersections(r, nthreads=n)),
-        ("list_intersections", lambda s, r, p, n: s.list_intersections(r, nthreads=n)),
-        ("compute_occupancy", lambda s, r, p, n: s.compute_occupancy(p, nthreads=n)),
-        ("compute_closest_points", lambda s, r, p, n: s.compute_closest_points(p, nthreads=n)),
-        ("compute_distance", lambda s, r, p, n: s.compute_distance(p, nthreads=n)),
-        ("compute_signed_distance", lambda s, r, p, n: s.compute_signed_distance(p, nthreads=n)),
+        (
+            "cast_rays",
+            lambda s, r, p, n: s.cast_rays(r, nthreads=n),
+            lambda s, r, p, n: tracer(s).intersect(o(r), d(r), threads=n),
+        ),
+        (
+            "test_occlusions",
+            lambda s, r, p, n: s.test_occlusions(r, nthreads=n),
+            lambda s, r, p, n: tracer(s).occluded(o(r), d(r), threads=n),
+        ),
+        (
+            "count_intersections",
+            lambda s, r, p, n: s.count_intersections(r, nthreads=n),
+            lambda s, r, p, n: crossings(s).count(o(r), d(r), threads=n),
+        ),
+        (
+            "list_intersections",
+            lambda s, r, p, n: s.list_intersections(r, nthreads=n),
+            lambda s, r, p, n: crossings(s).all(o(r), d(r), points=False, details=False, threads=n),
+        ),
+        (
+            "compute_occupancy",
+            lambda s, r, p, n: s.compute_occupancy(p, nthreads=n),
+            lambda s, r, p, n: crossings(s).contains(p, threads=n),
+        ),
+        (
+            "compute_closest_points",
+            lambda s, r, p, n: s.compute_closest_points(p, nthreads=n),
+            lambda s, r, p, n: distance(s).closest_points(p, threads=n),
+        ),
+        (
+            "compute_distance",
+            lambda s, r, p, n: s.compute_distance(p, nthreads=n),
+            lambda s, r, p, n: distance(s).distance(p, threads=n),
+        ),
+        (
+            "compute_signed_distance",
+            lambda s, r, p, n: s.compute_signed_distance(p, nthreads=n),
+            lambda s, r, p, n: distance(s).signed_distance(p, sign="parity", threads=n),
+        ),
     ]
+
+
+def timed(function, scene, rays, points, threads):
+    start = time.perf_counter()
+    function(scene, rays, points, threads)
+    return time.perf_counter() - start
 
 
 def speed(args):
@@ -70,23 +133,27 @@ def speed(args):
         their_rays, their_points = o3d.core.Tensor(rays), o3d.core.Tensor(points)
         # Builds (at the first query of each kind: contacts, crossings, distances) apart from the timings.
         for scene, r, p in ((ours, rays, points), (theirs, their_rays, their_points)):
-            for _label, call in queries():
+            for _label, call, _core in queries():
                 call(scene, r[:1], p[:1], args.threads)
-        print(f"\n{name}: {len(faces)} triangles, {args.count} rays/points, {args.threads} threads")
-        for label, call in queries():
+        print(
+            f"\n{name}: {len(faces)} triangles, {args.count} rays/points, {args.threads} threads, "
+            f"medians of {args.repeat}"
+        )
+        for label, call, core in queries():
+            if args.queries and label not in args.queries:
+                continue
+            calls = [(call, theirs, their_rays, their_points), (call, ours, rays, points), (core, ours, rays, points)]
             runs = []
-            for run in range(args.repeat):
-                order = [(theirs, their_rays, their_points), (ours, rays, points)]
-                times = {}
-                for scene, r, p in order if run % 2 == 0 else order[::-1]:
-                    start = time.perf_counter()
-                    call(scene, r, p, args.threads)
-                    times[scene is ours] = time.perf_counter() - start
-                runs.append((times[False], times[True]))
-            t_theirs, t_ours = np.median(np.array(runs), axis=0)
-            rows.append((name, label, t_theirs, t_ours))
+            for run in range(args.repeat):  # the three in turn, each run starting with the next one
+                order = [(run + k) % 3 for k in range(3)]
+                times = {k: timed(*calls[k], args.threads) for k in order}
+                runs.append([times[0], times[1], times[2]])
+            t_theirs, t_ours, t_core = np.median(np.array(runs), axis=0)
+            rows.append((name, label, t_theirs, t_ours, t_core))
             print(
-                f"  {label:24s} open3d {t_theirs:7.3f} s   spacebvh {t_ours:7.3f} s   ratio {t_theirs / t_ours:5.2f}x"
+                f"  {label:24s} open3d {t_theirs:7.3f} s   spacebvh {t_ours:7.3f} s (core {t_core:7.3f} s)   "
+                f"ratio {t_theirs / t_ours:5.2f}x (core {t_theirs / t_core:5.2f}x, "
+                f"drop-in / core {t_ours / t_core:4.2f})"
             )
     return rows
 
@@ -183,6 +250,7 @@ def main():
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each query pair; medians are printed")
     parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    parser.add_argument("--queries", nargs="+", choices=[q[0] for q in queries()], help="time only these (default all)")
     parser.add_argument("--grid", type=int, default=8, help="squares per box edge in the hostile sets")
     parser.add_argument("--surface-grid", type=int, default=3, help="quads per box edge for the rays from the surface")
     parser.add_argument("--hostile-only", action="store_true", help="only the wrong answers, no timings")
@@ -195,9 +263,15 @@ def main():
     from_the_surface(args)
     if not rows:
         return
-    print("\nscene           query                     open3d s  spacebvh s  open3d / spacebvh")
-    for name, label, theirs, ours in rows:
-        print(f"{name:15s} {label:24s} {theirs:9.3f} {ours:11.3f} {theirs / ours:10.2f}x")
+    print(
+        "\nscene           query                     open3d s  spacebvh s  core s  open3d / spacebvh  open3d / core"
+        "  drop-in / core"
+    )
+    for name, label, theirs, ours, core in rows:
+        print(
+            f"{name:15s} {label:24s} {theirs:9.3f} {ours:11.3f} {core:7.3f} {theirs / ours:17.2f}x"
+            f" {theirs / core:13.2f}x {ours / core:15.2f}"
+        )
 
 
 if __name__ == "__main__":

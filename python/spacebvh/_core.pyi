@@ -20,6 +20,7 @@ __all__: list[str] = [
     "DistanceQueries",
     "EmbreeTracer",
     "Error",
+    "GeometryMap",
     "Quality",
     "RayQueries",
     "RenderScene",
@@ -605,6 +606,58 @@ class RenderScene:
     def name(self) -> str:
         """
         The name given, used in errors.
+        """
+
+class GeometryMap:
+    """
+    The triangles of a mesh combined from several geometries (in order), mapped back to (geometry id, primitive id) with a unit normal each, and Open3D's RaycastingScene queries answered straight into its arrays (spacebvh.open3d): one pass over the rays without the GIL, misses as INVALID_ID (0xFFFFFFFF).
+    """
+    def __init__(
+        self, counts: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], normals: typing.Any
+    ) -> None:
+        """
+        counts: the triangles of each geometry; normals (sum(counts), 3): the unit normal of each combined triangle (zero for a degenerate one).
+        """
+    def cast_rays(
+        self, tracer: Tracer, rays: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex = 0
+    ) -> dict:
+        """
+        Rays (k, 6) float32 or float64 (origin, direction; any strides), as Open3D passes them. The nearest contact of each ray over the Tracer `tracer` of the combined mesh: {'t_hit' float32 (inf on a miss), 'geometry_ids', 'primitive_ids' uint32, 'primitive_uvs' (k, 2), 'primitive_normals' (k, 3) float32}.
+        """
+    def compute_occupancy(
+        self, queries: RayQueries, query_points: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex = 0
+    ) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        1.0 where a point (k, 3) is inside by the exact parity of crossings (RayQueries `queries`), else 0.0: float32 (k,).
+        """
+    def count_intersections(
+        self, queries: RayQueries, rays: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex = 0
+    ) -> numpy.typing.NDArray[numpy.int32]:
+        """
+        Rays (k, 6) float32 or float64 (origin, direction; any strides), as Open3D passes them. The crossings of each ray (RayQueries `queries`, t >= 0): int32 (k,).
+        """
+    def list_intersections(
+        self, queries: RayQueries, rays: typing.Any, *, threads: typing.SupportsInt | typing.SupportsIndex = 0
+    ) -> dict:
+        """
+        Rays (k, 6) float32 or float64 (origin, direction; any strides), as Open3D passes them. Every crossing (RayQueries `queries`, t >= 0) by ray and then by t: {'ray_splits' uint32 (k + 1), 'ray_ids', 'geometry_ids', 'primitive_ids' uint32, 'primitive_uvs' (m, 2), 't_hit' float32}.
+        """
+    def test_occlusions(
+        self,
+        tracer: Tracer,
+        rays: typing.Any,
+        tnear: typing.SupportsFloat | typing.SupportsIndex = 0.0,
+        tfar: typing.SupportsFloat | typing.SupportsIndex = ...,
+        *,
+        threads: typing.SupportsInt | typing.SupportsIndex = 0,
+    ) -> numpy.typing.NDArray[numpy.bool]:
+        """
+        Rays (k, 6) float32 or float64 (origin, direction; any strides), as Open3D passes them. Whether each ray touches the mesh for t in [tnear, tfar]: bool (k,).
+        """
+    @property
+    def triangles(self) -> int:
+        """
+        The number of combined triangles.
         """
 
 def build(

@@ -149,15 +149,18 @@ class RaycastingScene:
             starts = np.cumsum([0] + [len(v) for v, _ in self._geometries])[:-1]
             faces = np.concatenate([f + s for (_, f), s in zip(self._geometries, starts)])
             cache["bvh"] = _core.build(_core.mesh(vertices, faces), threads=self._build_threads)
-            # Per combined triangle, with one more row for "no triangle" (index -1): INVALID_ID and a
-            # zero normal, so that one gather maps hits and misses alike.
-            invalid = np.array([INVALID_ID], dtype=np.uint32)
-            cache["geometry"] = np.concatenate([np.repeat(np.arange(len(counts), dtype=np.uint32), counts), invalid])
-            cache["primitive"] = np.concatenate([np.arange(c, dtype=np.uint32) for c in counts] + [invalid])
             corners = vertices.astype(np.float64)[faces]
             normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
             length = np.linalg.norm(normals, axis=1, keepdims=True)
             unit = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+            # Per combined triangle its geometry and primitive ids and unit normal: the ray queries
+            # write Open3D's arrays through it in C++, the point queries through _ids and _normals.
+            cache["map"] = _core.GeometryMap(counts, unit.astype(np.float32))
+            # The same with one more row for "no triangle" (index -1): INVALID_ID and a zero normal,
+            # so that one gather maps hits and misses alike.
+            invalid = np.array([INVALID_ID], dtype=np.uint32)
+            cache["geometry"] = np.concatenate([np.repeat(np.arange(len(counts), dtype=np.uint32), counts), invalid])
+            cache["primitive"] = np.concatenate([np.arange(c, dtype=np.uint32) for c in counts] + [invalid])
             cache["normals"] = np.vstack([unit, np.zeros((1, 3))]).astype(np.float32)
         self._cache = cache
         return cache
@@ -189,28 +192,27 @@ class RaycastingScene:
         return cache["normals"][triangle]
 
     # -- rays ------------------------------------------------------------------------------------
+    # The ray queries and compute_occupancy hand Open3D's rows to spacebvh.GeometryMap, which reads
+    # them in place and writes every output array in one pass without the GIL.
     def cast_rays(self, rays: Any, nthreads: int = 0) -> dict:
         """The nearest contact of each ray (closed triangles): ``t_hit`` (inf on a miss),
         ``geometry_ids``, ``primitive_ids`` (INVALID_ID on a miss), ``primitive_uvs``, ``primitive_normals``."""
         rows, shape = _last_dim(rays, 6, "rays")
         threads = _threads(nthreads)
         tracer = self._query("tracer")
-        count = len(rows)
-        t = np.full(count, np.inf, dtype=np.float32)
-        triangle = np.full(count, -1, dtype=np.int64)
-        uvs = np.zeros((count, 2), dtype=np.float32)
-        if tracer is not None and count:
-            t_hit, triangle, u, v = tracer.intersect(rows[:, :3], rows[:, 3:], threads=threads)
-            t = t_hit.astype(np.float32, copy=False)
-            uvs = np.stack([u, v], axis=1).astype(np.float32)
-        geometry, primitive = self._ids(triangle)
-        return {
-            "t_hit": _out(t.reshape(shape)),
-            "geometry_ids": _out(geometry.reshape(shape)),
-            "primitive_ids": _out(primitive.reshape(shape)),
-            "primitive_uvs": _out(uvs.reshape(shape + (2,))),
-            "primitive_normals": _out(self._normals(triangle).reshape(shape + (3,))),
-        }
+        if tracer is None or not len(rows):
+            count = len(rows)
+            invalid = np.full(count, INVALID_ID, dtype=np.uint32)
+            answer = {
+                "t_hit": np.full(count, np.inf, dtype=np.float32),
+                "geometry_ids": invalid,
+                "primitive_ids": invalid.copy(),
+                "primitive_uvs": np.zeros((count, 2), dtype=np.float32),
+                "primitive_normals": np.zeros((count, 3), dtype=np.float32),
+            }
+        else:
+            answer = self._scene()["map"].cast_rays(tracer, rows, threads=threads)
+        return {key: _out(value.reshape(shape + value.shape[1:])) for key, value in answer.items()}
 
     def test_occlusions(self, rays: Any, tnear: float = 0.0, tfar: float = math.inf, nthreads: int = 0) -> Any:
         """Whether each ray touches the scene for t in [tnear, tfar] (closed triangles): bool (...)."""
@@ -219,7 +221,7 @@ class RaycastingScene:
         tracer = self._query("tracer")
         if tracer is None or not len(rows):
             return _out(np.zeros(shape, dtype=bool))
-        answers = tracer.occluded(rows[:, :3], rows[:, 3:], tmin=float(tnear), tmax=float(tfar), threads=threads)
+        answers = self._scene()["map"].test_occlusions(tracer, rows, float(tnear), float(tfar), threads=threads)
         return _out(answers.reshape(shape))
 
     def count_intersections(self, rays: Any, nthreads: int = 0) -> Any:
@@ -229,7 +231,7 @@ class RaycastingScene:
         queries = self._query("crossings")
         if queries is None or not len(rows):
             return _out(np.zeros(shape, dtype=np.int32))
-        return _out(queries.count(rows[:, :3], rows[:, 3:], threads=threads).astype(np.int32).reshape(shape))
+        return _out(self._scene()["map"].count_intersections(queries, rows, threads=threads).reshape(shape))
 
     def list_intersections(self, rays: Any, nthreads: int = 0) -> dict:
         """Every crossing (t >= 0), by ray and then by t: ``ray_splits`` (rays + 1: where each ray's
@@ -238,28 +240,28 @@ class RaycastingScene:
         threads = _threads(nthreads)
         queries = self._query("crossings")
         if queries is None or not len(rows):
-            index_ray = triangle = np.zeros(0, dtype=np.int64)
-            t = u = v = np.zeros(0)
+            none = np.zeros(0, dtype=np.uint32)
+            answer = {
+                "ray_splits": np.zeros(len(rows) + 1, dtype=np.uint32),
+                "ray_ids": none,
+                "geometry_ids": none,
+                "primitive_ids": none,
+                "primitive_uvs": np.zeros((0, 2), dtype=np.float32),
+                "t_hit": np.zeros(0, dtype=np.float32),
+            }
         else:
-            index_ray, triangle, t, u, v, _ = queries.all(rows[:, :3], rows[:, 3:], points=False, threads=threads)
-        splits = np.zeros(len(rows) + 1, dtype=np.uint32)
-        np.cumsum(np.bincount(index_ray, minlength=len(rows)), out=splits[1:])
-        geometry, primitive = self._ids(triangle)
-        return {
-            "ray_splits": _out(splits),
-            "ray_ids": _out(index_ray.astype(np.uint32)),
-            "geometry_ids": _out(geometry),
-            "primitive_ids": _out(primitive),
-            "primitive_uvs": _out(np.stack([u, v], axis=1).astype(np.float32).reshape(-1, 2)),
-            "t_hit": _out(t.astype(np.float32)),
-        }
+            answer = self._scene()["map"].list_intersections(queries, rows, threads=threads)
+        return {key: _out(value) for key, value in answer.items()}
 
     # -- points ----------------------------------------------------------------------------------
     def _points(self, query_points: Any, kind: str) -> tuple[np.ndarray, tuple[int, ...], Any]:
         rows, shape = _last_dim(query_points, 3, "query_points")
-        bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
-        if len(bad):
-            raise ValueError(f"query_points: point {bad[0]} is not finite: {rows[bad[0]]}")
+        # One sum settles the common case (a NaN or inf makes it NaN or inf; float32 values cannot
+        # overflow a float64 sum); the row is looked for only when it is not finite.
+        if not np.isfinite(rows.sum(dtype=np.float64)):
+            bad = np.flatnonzero(~np.isfinite(rows).all(axis=1))
+            if len(bad):
+                raise ValueError(f"query_points: point {bad[0]} is not finite: {rows[bad[0]]}")
         queries = self._query(kind)
         if queries is None:
             raise ValueError(f"the scene has no triangles: add_triangles() first ({len(self._geometries)} added)")
@@ -300,7 +302,7 @@ class RaycastingScene:
         ``nsamples`` is accepted and changes nothing."""
         _check_nsamples(nsamples)
         rows, shape, queries = self._points(query_points, "crossings")
-        return _out(queries.contains(rows, threads=_threads(nthreads)).astype(np.float32).reshape(shape))
+        return _out(self._scene()["map"].compute_occupancy(queries, rows, threads=_threads(nthreads)).reshape(shape))
 
     # -- cameras ---------------------------------------------------------------------------------
     @staticmethod

@@ -19,6 +19,7 @@
 #include "numpy_args.hpp"
 #include "spacebvh/bvh.hpp"
 #include "spacebvh/error.hpp"
+#include "spacebvh/queries.hpp"
 #include "spacebvh/recipe.hpp"
 #include "spacebvh/tools/scene.hpp"
 #include "spacebvh/trace.hpp"
@@ -137,6 +138,7 @@ void bind_queries(py::module_& m);       // queries.cpp: RayQueries
 void bind_float64(py::module_& m);       // float64.cpp: Tracer64
 void bind_distance(py::module_& m);      // distance.cpp: DistanceQueries
 void bind_render_scene(py::module_& m);  // render_scene.cpp: RenderScene
+void bind_geometry_map(py::module_& m);  // geometry_map.cpp: GeometryMap (spacebvh.open3d)
 
 // settings.cpp: build()'s recipe from its builder or quality and its keywords (exactly the settings
 // table's names); a recipe's settings as a dict; build()'s docstring, listing the settings.
@@ -146,8 +148,14 @@ py::dict settings_of(const TreeRecipe& recipe);
 const std::string& build_doc();
 
 // Closest hits as (t, primitive, u, v) arrays: t in the scene's dtype (inf on a miss), primitive
-// int64 (-1 on a miss), u, v float32. Used by every tracer binding.
-py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits);
-py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers);
+// int64 (-1 on a miss), u, v float32. Used by every tracer binding. Both converters run across
+// `threads` threads without the GIL.
+py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int threads);
+py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers, int threads);
+
+// queries.cpp: whether each point (k, 3) of the argument `what` is inside by RayQueries::contains,
+// across `threads` threads without the GIL; a point that is not finite raises Error naming its row.
+std::vector<uint8_t> contained_points(const PyQueryObject<RayQueries>& self, const py::handle& points_arg,
+                                      const char* what, int threads);
 
 }  // namespace spacebvh::python

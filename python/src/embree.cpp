@@ -37,7 +37,7 @@ py::tuple closest_hits(const PyEmbreeTracer& self, const py::handle& origins, co
     std::vector<Hit> hits(rays.size());
     without_gil(threads,
                 [&] { self.packets ? self.embree->intersect16(rays, hits) : self.embree->intersect(rays, hits); });
-    return hits_as_arrays(self.scene.frame, hits);
+    return hits_as_arrays(self.scene.frame, hits, threads);
 }
 
 py::array_t<bool> any_hits(const PyEmbreeTracer& self, const py::handle& origins, const py::handle& directions,
@@ -47,7 +47,7 @@ py::array_t<bool> any_hits(const PyEmbreeTracer& self, const py::handle& origins
     std::vector<uint8_t> answers(rays.size());
     without_gil(threads,
                 [&] { self.packets ? self.embree->occluded16(rays, answers) : self.embree->occluded(rays, answers); });
-    return answers_as_array(answers);
+    return answers_as_array(answers, threads);
 }
 
 }  // namespace

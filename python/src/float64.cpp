@@ -114,7 +114,7 @@ void bind_float64(py::module_& m) {
                 const std::vector<Ray64> rays = rays_from(origins, directions, tmin, tmax);
                 std::vector<uint8_t> answers(rays.size());
                 without_gil(self.threads, [&] { self.tracer->occluded(rays, answers); });
-                return answers_as_array(answers);
+                return answers_as_array(answers, self.threads);
             },
             py::arg("origins"), py::arg("directions"), py::arg("tmin") = py::none(), py::arg("tmax") = py::none(),
             "Whether each ray hits anything for t in [tmin, tmax] (exact).")

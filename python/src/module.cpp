@@ -47,4 +47,5 @@ PYBIND11_MODULE(_core, m) {
     bind_float64(m);
     bind_distance(m);
     bind_render_scene(m);
+    bind_geometry_map(m);
 }

@@ -8,9 +8,26 @@
 #include <tbb/parallel_for.h>
 
 #include "bindings.hpp"
+#include "hit_chunks.hpp"
 #include "spacebvh/queries.hpp"
 
 namespace spacebvh::python {
+
+std::vector<uint8_t> contained_points(const PyQueryObject<RayQueries>& self, const py::handle& points_arg,
+                                      const char* what, int threads) {
+    const RealRows rows = RealRows::from(points_arg, what);
+    std::vector<Vec3> points(rows.rows());
+    std::vector<uint8_t> answers(points.size());
+    const Frame& frame = self.scene.frame;
+    without_gil(threads, [&] {
+        const size_t bad = read_finite_points(rows, std::span<Vec3>(points), [&](Vec3& point, int axis, double value) {
+            point[axis] = frame.to_local(value, axis);
+        });
+        if (bad != points.size()) throw Error(std::string(what) + ": row " + std::to_string(bad) + " is not finite");
+        self.queries->contains(points, answers);
+    });
+    return answers;
+}
 
 namespace {
 
@@ -76,7 +93,7 @@ py::array_t<bool> any_hits(const PyQueries& self, const py::handle& origins, con
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<uint8_t> answers(rays.size());
     without_gil(threads, [&] { self.queries->any_hits(rays, answers); });
-    return answers_as_array(answers);
+    return answers_as_array(answers, threads);
 }
 
 py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::handle& directions,
@@ -86,32 +103,29 @@ py::tuple all_hits(const PyQueries& self, const py::handle& origins, const py::h
     if (max_hits && *max_hits < 0)
         throw Error("max_hits must be >= 0 (None: no limit), not " + std::to_string(*max_hits));
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
-    HitLists lists;
-    without_gil(threads, [&] { lists = self.queries->all_hits(rays, max_hits ? size_t(*max_hits) : kNoHitLimit); });
-    const py::ssize_t m = py::ssize_t(lists.hits.size()), details = details_wanted ? m : 0;
+    ChunkedHits<QueryHit> lists;
+    without_gil(threads, [&] {
+        lists = collect_chunked_hits<QueryHit>(*self.queries, rays, max_hits ? size_t(*max_hits) : kNoHitLimit,
+                                               [](const QueryHit& hit) { return hit; });
+    });
+    const py::ssize_t m = py::ssize_t(lists.size()), details = details_wanted ? m : 0;
     py::array_t<int64_t> index_ray(m), primitive(m);
     py::array_t<double> t(details), u(details), v(details);
     py::array_t<double> points(std::vector<py::ssize_t>{points_wanted ? m : 0, 3});
     int64_t *ray_out = index_ray.mutable_data(), *id_out = primitive.mutable_data();
     double *t_out = t.mutable_data(), *u_out = u.mutable_data(), *v_out = v.mutable_data(),
            *p_out = points.mutable_data();
-    // Rays in blocks across the threads: each block writes the disjoint range of its rays' hits.
     without_gil(threads, [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                              for (size_t r = range.begin(); r < range.end(); ++r)
-                                  for (uint64_t k = lists.offsets[r]; k < lists.offsets[r + 1]; ++k) {
-                                      const QueryHit& hit = lists.hits[k];
-                                      ray_out[k] = int64_t(r);
-                                      id_out[k] = int64_t(hit.primitive);
-                                      if (details_wanted) {
-                                          t_out[k] = hit.t;
-                                          u_out[k] = hit.u;
-                                          v_out[k] = hit.v;
-                                      }
-                                      if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
-                                  }
-                          });
+        lists.for_each([&](uint64_t k, size_t ray, const QueryHit& hit) {
+            ray_out[k] = int64_t(ray);
+            id_out[k] = int64_t(hit.primitive);
+            if (details_wanted) {
+                t_out[k] = hit.t;
+                u_out[k] = hit.u;
+                v_out[k] = hit.v;
+            }
+            if (points_wanted) put_point(self.scene.frame, hit, p_out + 3 * k);
+        });
     });
     return py::make_tuple(index_ray, primitive, t, u, v, points);
 }
@@ -120,28 +134,22 @@ py::array_t<int64_t> count_hits(const PyQueries& self, const py::handle& origins
                                 const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = self.threads_for(threads_arg);
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
-    std::vector<uint32_t> counts(rays.size());
-    without_gil(threads, [&] { self.queries->count_hits(rays, counts); });
-    py::array_t<int64_t> result(py::ssize_t(counts.size()));
+    py::array_t<int64_t> result(py::ssize_t(rays.size()));
     int64_t* out = result.mutable_data();
-    for (size_t i = 0; i < counts.size(); ++i) out[i] = counts[i];
+    without_gil(threads, [&] {
+        std::vector<uint32_t> counts(rays.size());
+        self.queries->count_hits(rays, counts);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, counts.size(), 1 << 14),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i < range.end(); ++i) out[i] = counts[i];
+                          });
+    });
     return result;
 }
 
 py::array_t<bool> contains(const PyQueries& self, const py::handle& points_arg, std::optional<int> threads_arg) {
     const int threads = self.threads_for(threads_arg);
-    const RealRows rows = RealRows::from(points_arg, "points");
-    std::vector<Vec3> points(rows.rows());
-    std::vector<uint8_t> answers(points.size());
-    const Frame& frame = self.scene.frame;
-    without_gil(threads, [&] {
-        const size_t bad = read_finite_points(rows, std::span<Vec3>(points), [&](Vec3& point, int axis, double value) {
-            point[axis] = frame.to_local(value, axis);
-        });
-        if (bad != points.size()) throw Error("points: row " + std::to_string(bad) + " is not finite");
-        self.queries->contains(points, answers);
-    });
-    return answers_as_array(answers);
+    return answers_as_array(contained_points(self, points_arg, "points", threads), threads);
 }
 
 constexpr const char* kRaysDoc =

@@ -119,7 +119,7 @@ py::tuple intersect(const PyRenderScene& self, const py::handle& origins, const 
     without_gil(self.threads, [&] { self.scene->intersect(rays, hits, context, masks); });
     std::vector<Hit> plain(hits.size());
     for (size_t i = 0; i < hits.size(); ++i) plain[i] = Hit{hits[i].t, hits[i].primitive, hits[i].u, hits[i].v};
-    const py::tuple first = hits_as_arrays(Frame{}, plain);
+    const py::tuple first = hits_as_arrays(Frame{}, plain, self.threads);
     return py::make_tuple(first[0], first[1], first[2], first[3], ids_array(hits, size_t(-1)), ids_array(hits, 0));
 }
 
@@ -130,7 +130,7 @@ py::array_t<bool> occluded(const PyRenderScene& self, const py::handle& origins,
     const std::vector<uint32_t> masks = masks_of(mask, rays.size(), context.mask);
     std::vector<uint8_t> answers(rays.size());
     without_gil(self.threads, [&] { self.scene->occluded(rays, answers, context, masks); });
-    return answers_as_array(answers);
+    return answers_as_array(answers, self.threads);
 }
 
 uint32_t attach_mesh(PyRenderScene& self, const PyScene& mesh, const py::handle& mask) {

@@ -1,5 +1,8 @@
 // SPDX-License-Identifier: MIT
 // Tracers: a named traversal kernel over a tree, closest and any hits for batches of NumPy rays.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <optional>
 
 #include "bindings.hpp"
@@ -7,7 +10,7 @@
 
 namespace spacebvh::python {
 
-py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits) {
+py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int threads) {
     const py::ssize_t n = py::ssize_t(hits.size());
     py::array t = new_real_array(frame.float64, {n});
     py::array_t<float> u(n), v(n);
@@ -17,26 +20,33 @@ py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits) {
     float* v_out = v.mutable_data();
     int64_t* primitive_out = primitive.mutable_data();
     // t needs no change of frame: the frame moves origins, not directions.
-    {
-        py::gil_scoped_release unlocked;
-        for (size_t i = 0; i < hits.size(); ++i) {
-            const Hit& hit = hits[i];
-            if (frame.float64)
-                static_cast<double*>(t_out)[i] = hit.t;
-            else
-                static_cast<float*>(t_out)[i] = hit.t;
-            primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
-            u_out[i] = hit.u;
-            v_out[i] = hit.v;
-        }
-    }
+    without_gil(threads, [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, hits.size(), 1 << 13),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i < range.end(); ++i) {
+                                  const Hit& hit = hits[i];
+                                  if (frame.float64)
+                                      static_cast<double*>(t_out)[i] = hit.t;
+                                  else
+                                      static_cast<float*>(t_out)[i] = hit.t;
+                                  primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
+                                  u_out[i] = hit.u;
+                                  v_out[i] = hit.v;
+                              }
+                          });
+    });
     return py::make_tuple(t, primitive, u, v);
 }
 
-py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers) {
+py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers, int threads) {
     py::array_t<bool> result(py::ssize_t(answers.size()));
     bool* out = result.mutable_data();
-    for (size_t i = 0; i < answers.size(); ++i) out[i] = answers[i] != 0;
+    without_gil(threads, [&] {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, answers.size(), 1 << 14),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i < range.end(); ++i) out[i] = answers[i] != 0;
+                          });
+    });
     return result;
 }
 
@@ -50,7 +60,7 @@ py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<Hit> hits(rays.size());
     without_gil(threads, [&] { self.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits)); });
-    return hits_as_arrays(self.scene.frame, hits);
+    return hits_as_arrays(self.scene.frame, hits, threads);
 }
 
 py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
@@ -59,7 +69,7 @@ py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, cons
     const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
     std::vector<uint8_t> answers(rays.size());
     without_gil(threads, [&] { self.tracer->occluded(std::span<const Ray>(rays), std::span<uint8_t>(answers)); });
-    return answers_as_array(answers);
+    return answers_as_array(answers, threads);
 }
 
 }  // namespace
