@@ -95,8 +95,7 @@ int main(int argc, char** argv) {
     };
     std::vector<uint32_t> counts(count);
     time_query(
-        "count", [&] { queries.count_hits(in.rays, counts); },
-        [&] { return weighted_sum(counts); });
+        "count", [&] { queries.count_hits(in.rays, counts); }, [&] { return weighted_sum(counts); });
     HitLists lists;
     time_query(
         "all", [&] { lists = queries.all_hits(in.rays); },
@@ -127,7 +126,6 @@ int main(int argc, char** argv) {
         });
     std::vector<uint8_t> inside(count);
     time_query(
-        "contains", [&] { queries.contains(in.points, inside); },
-        [&] { return weighted_sum(inside); });
+        "contains", [&] { queries.contains(in.points, inside); }, [&] { return weighted_sum(inside); });
     return 0;
 }
