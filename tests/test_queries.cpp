@@ -15,6 +15,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "spacebvh/presets.hpp"
@@ -349,6 +350,51 @@ TEST(Queries, LargeContainmentBatchOverDegenerateTrianglesIsOutside) {
 
 bool same_hit(const QueryHit& a, const QueryHit& b) {
     return a.primitive == b.primitive && a.t == b.t && a.u == b.u && a.v == b.v && a.point == b.point;
+}
+
+// All hits and counts on a split tree (triangles referenced from several leaves), on rays through
+// vertices and edges, the same bit for bit on one thread and on several, in batches and one ray at a
+// time (as the Python binding calls it from its threads).
+TEST(Queries, CrossingsAreIndependentOfThreads) {
+    const Scene scene = load_scene("builtin:organic");
+    const RayQueries queries(scene.triangles, spacebvh::build(scene, config_for("spatial")));
+    AABB bounds;
+    for (const Triangle& t : scene.triangles) bounds.extend(t.bounds());
+    std::vector<Ray> rays = generate_random_rays(bounds, 3000, 41);
+    for (const std::vector<Ray>& through :
+         {rays_through_vertices(scene.triangles, 3000, 42), rays_through_edges(scene.triangles, 3000, 43)})
+        rays.insert(rays.end(), through.begin(), through.end());
+    const auto answers = [&](int threads) {
+        HitLists lists;
+        std::vector<uint32_t> counts(rays.size()), per_ray(rays.size());
+        tbb::task_arena(threads).execute([&] {
+            lists = queries.all_hits(rays);
+            queries.count_hits(rays, counts);
+            tbb::parallel_for(size_t(0), rays.size(), [&](size_t i) {
+                std::vector<QueryHit> hits;
+                queries.all_hits(rays[i], hits);
+                per_ray[i] = uint32_t(hits.size());
+            });
+        });
+        return std::make_tuple(std::move(lists), counts, per_ray);
+    };
+    const auto [lists, counts, per_ray] = answers(1);
+    size_t crossings = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        ASSERT_EQ(lists.offsets[i + 1] - lists.offsets[i], counts[i]) << "ray " << i;
+        ASSERT_EQ(per_ray[i], counts[i]) << "ray " << i;
+        crossings += counts[i];
+    }
+    EXPECT_GT(crossings, rays.size() / 4);
+    for (int threads : {2, 3}) {
+        const auto [again, again_counts, again_per_ray] = answers(threads);
+        EXPECT_EQ(again.offsets, lists.offsets) << threads << " threads";
+        ASSERT_EQ(again.hits.size(), lists.hits.size()) << threads << " threads";
+        for (size_t k = 0; k < lists.hits.size(); ++k)
+            ASSERT_TRUE(same_hit(again.hits[k], lists.hits[k])) << threads << " threads, hit " << k;
+        EXPECT_EQ(again_counts, counts) << threads << " threads";
+        EXPECT_EQ(again_per_ray, per_ray) << threads << " threads";
+    }
 }
 
 // Every crossing of the ray, sorted by (t, primitive), from every triangle.

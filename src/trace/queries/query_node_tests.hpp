@@ -8,6 +8,7 @@
 #include <immintrin.h>
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -137,7 +138,7 @@ public:
                 __builtin_prefetch(&nodes_[node.child[slot]]);
             } else {
                 leaves |= 1u << slot;
-                if constexpr (!Base::kNearestFirst) __builtin_prefetch(&packs_[node.child[slot]]);
+                if constexpr (!Base::kNearestFirst) prefetch_pack(packs_[node.child[slot]]);
             }
         }
         const auto entry_at = [&](int slot) {
@@ -200,13 +201,66 @@ inline bool wide_slabs_apply(const Ray& ray) { return ray.tmin >= 0.0f && FusedS
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(near, far, _CMP_LE_OQ)));
 }
 
-// The wide layout's query: rays with tmin >= 0 only (the fused constants assume it). Nearest first it
+// Starts fetching every line of what a child's test reads (a node's four, a pack's three), as the
+// kernels do (wide_kernel.inl): incoherent rays wait on memory at nearly every node, and the first
+// line alone leaves the node test waiting on the other three.
+[[gnu::always_inline]] inline void prefetch_wide_child(const WideNode<8>* nodes, const TrianglePack* packs,
+                                                       uint32_t child, uint32_t count) {
+    if (count == 0) {
+        const char* bytes = reinterpret_cast<const char*>(&nodes[child]);
+        for (size_t line = 0; line < sizeof(WideNode<8>); line += 64) _mm_prefetch(bytes + line, _MM_HINT_T0);
+    } else {
+        prefetch_pack(packs[child]);
+    }
+}
+
+// The walk of every leaf a ray with tmin >= 0 may cross within [tmin, tmax] over the eight-wide nodes,
+// for walks whose answers do not depend on the order (all hits, counts, any hit). A node's leaves are
+// tested one node test later, after the next inner node's: their packs, fetched with that node, arrive
+// meanwhile, and their test then overlaps the fetch of that node's children instead of waiting for
+// its own. visit_leaf(SlotEntry) returns true to stop the walk.
+template <class VisitLeaf>
+[[gnu::always_inline]] inline void walk_wide_leaves(const WideLayout<8>& wide, const Ray& ray, VisitLeaf&& visit_leaf) {
+    const WideNode<8>* nodes = wide.nodes.data();
+    const TrianglePack* packs = wide.packs.data();
+    const WideRay boxes(ray);
+    const float tmin = ray.tmin, tmax = ray.tmax;
+    uint32_t stack[kStackSize * 4];  // inner nodes still to test: at most seven pushes per level
+    int top = 0;
+    SlotEntry leaves[8], next_leaves[8];
+    int leaf_count = 0;
+    uint32_t at = 0;  // the root, an inner node
+    while (true) {
+        const WideNode<8>& node = nodes[at];
+        __m256 near;
+        int next_count = 0;
+        for (unsigned m = wide_children(node, boxes, tmin, tmax, near); m; m &= m - 1) {
+            const int slot = __builtin_ctz(m);
+            const uint32_t child = node.child[slot], count = node.count[slot];
+            prefetch_wide_child(nodes, packs, child, count);
+            if (count == 0)
+                stack[top++] = child;
+            else
+                next_leaves[next_count++] = {child, count};
+        }
+        for (int i = 0; i < leaf_count; ++i)
+            if (visit_leaf(leaves[i])) return;
+        for (int i = 0; i < next_count; ++i) leaves[i] = next_leaves[i];
+        leaf_count = next_count;
+        if (top == 0) break;
+        at = stack[--top];
+    }
+    for (int i = 0; i < leaf_count; ++i)
+        if (visit_leaf(leaves[i])) return;
+}
+
+// The wide layout's nearest-first query: rays with tmin >= 0 only (the fused constants assume it). It
 // walks as the closest-hit kernels do (wide_kernel.inl), leaves and inner nodes alike by entry
-// distance; the bound is then a float at or above the best t so far.
-template <ChildOrder Order>
-class WideSlabQuery : public SlotQuery<Order, float> {
+// distance; the bound is then a float at or above the best t so far. (Walks of every leaf on the ray
+// take walk_wide_leaves above.)
+class WideSlabQuery : public SlotQuery<ChildOrder::nearest_first, float> {
 public:
-    using Base = SlotQuery<Order, float>;
+    using Base = SlotQuery<ChildOrder::nearest_first, float>;
     using typename Base::Bound;
     using typename Base::Entry;
     static constexpr int kStackCapacity = kStackSize * 4;  // at most seven pushes per level
@@ -221,36 +275,16 @@ public:
         __m256 near;
         const unsigned entered = wide_children(node, boxes_, tmin_, bound, near);
         if (entered == 0) return 0;
-        if constexpr (Base::kNearestFirst) {
-            alignas(32) float key[8];
-            _mm256_store_ps(key, near);
-            const int n = nearest_first(entered, key, entry, out, [&](int slot) {
-                return Base::make_entry(node.child[slot], node.count[slot], key[slot]);
-            });
-            prefetch(entry);  // the child visited next
-            return n;
-        } else {
-            // Every leaf on the ray is tested: leaves are fetched ahead too.
-            unsigned leaves = 0;
-            for (unsigned m = entered; m; m &= m - 1) {
-                const int slot = __builtin_ctz(m);
-                prefetch(SlotEntry{node.child[slot], node.count[slot]});
-                if (node.count[slot] != 0) leaves |= 1u << slot;
-            }
-            return leaves_first(entered, leaves, entry, out,
-                                [&](int slot) { return Base::make_entry(node.child[slot], node.count[slot], 0.0f); });
-        }
+        alignas(32) float key[8];
+        _mm256_store_ps(key, near);
+        const int n = nearest_first(entered, key, entry, out, [&](int slot) {
+            return Base::make_entry(node.child[slot], node.count[slot], key[slot]);
+        });
+        prefetch_wide_child(nodes_, packs_, entry.child, entry.count);  // the child visited next
+        return n;
     }
 
 private:
-    template <class AnyEntry>
-    [[gnu::always_inline]] void prefetch(const AnyEntry& entry) const {
-        if (entry.count == 0)
-            __builtin_prefetch(&nodes_[entry.child]);
-        else
-            __builtin_prefetch(&packs_[entry.child]);
-    }
-
     const WideNode<8>* nodes_;
     const TrianglePack* packs_;
     WideRay boxes_;

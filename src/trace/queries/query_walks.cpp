@@ -69,15 +69,15 @@ template <class OnCrossing>
     return false;
 }
 
-// Visits every leaf the ray may cross within [tmin, tmax], in slot order, leaves first; on_crossing
-// as visit_leaf's. A leaf may hold triangles of its neighbours too (LeafPacker): they are real
+// Visits every leaf the ray may cross within [tmin, tmax] (over the wide nodes, a node's leaves after
+// the next node's test: walk_wide_leaves; over the binary ones, in slot order, leaves first);
+// on_crossing as visit_leaf's. A leaf may hold triangles of its neighbours too (LeafPacker): they are real
 // triangles, tested like the others, and the callers drop the repeats.
 template <class OnCrossing>
 inline void visit_crossings(const Layout& layout, RayContext& r, OnCrossing&& on_crossing) {
 #if defined(__AVX2__) && defined(__FMA__)
     if (layout.has_wide && wide_slabs_apply(r.ray)) {
-        float tmax = r.ray.tmax;
-        walk(WideSlabQuery<ChildOrder::leaves_first>(layout.wide, r.ray), tmax, [&](const auto& leaf) {
+        walk_wide_leaves(layout.wide, r.ray, [&](const SlotEntry& leaf) {
             return visit_leaf(layout.wide.packs.data(), r, leaf.child, leaf.count, on_crossing);
         });
         return;
@@ -127,7 +127,7 @@ void find_nearest(const Layout& layout, const Ray& ray, Nearest& nearest) {
 #if defined(__AVX2__) && defined(__FMA__)
     if (layout.has_wide && wide_slabs_apply(ray)) {
         float tmax = ray.tmax;  // a float at or above the best t: boxes are entered conservatively up to it
-        walk(WideSlabQuery<ChildOrder::nearest_first>(layout.wide, ray), tmax, [&](const auto& leaf) {
+        walk(WideSlabQuery(layout.wide, ray), tmax, [&](const auto& leaf) {
             visit_leaf(layout.wide.packs.data(), r, leaf.child, leaf.count,
                        [&](uint32_t id, const Vec3& v0, const Vec3& v1, const Vec3& v2) {
                            if (nearest.offer(id, v0, v1, v2)) tmax = std::nextafter(float(nearest.t), kInfinity);
