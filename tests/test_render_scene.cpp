@@ -5,6 +5,7 @@
 // paths and masks; shared meshes when ../shared is present.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -280,6 +281,139 @@ TEST(RenderScene, SharedMeshInstancedMatchesTheArbiter) {
     check_rays(*top.scene, all, flat, rays, 0xFFFFFFFFu, tally);
     EXPECT_EQ(tally.wrong + tally.misnamed, 0u) << tally.text.str();
     EXPECT_EQ(tally.flat_disagree, 0u);
+}
+
+// Masks changed after commit (set_mask) reach every path a walk takes: a mesh of the traced scene,
+// an instance, and the mesh of a one-mesh scene that an instance enters directly (its kernel called
+// from the parent's top level), for each kernel.
+class SceneMaskUpdates : public ::testing::TestWithParam<Kernel> {};
+
+TEST_P(SceneMaskUpdates, SetMaskAfterCommitReachesEveryPath) {
+    SceneConfig config;
+    config.tracer.kernel = GetParam();
+    const std::vector<Triangle> mesh = prefix_of("organic", 2000), soup = prefix_of("soup", 800);
+    const float size = length(bounds_of(mesh).extent());
+    Level one(config, "one");
+    const uint32_t only = one.mesh(mesh);
+    one.scene->commit();
+    Level top(config, "top");
+    const uint32_t floor = top.mesh(soup);
+    const uint32_t first = top.instance(one, placed({1, 2, 3}, 40.0f, {1.0f, 0.6f, 1.3f}, {0, 0, 0}));
+    top.instance(one, placed({0, 1, 0}, 110.0f, {0.8f, 0.8f, 0.8f}, {0.5f * size, 0, 0}, true));
+    top.scene->commit();
+    const std::vector<Ray> rays = tools::generate_random_rays(top.scene->bounds(), 300, 21);
+    const auto check = [&](const char* step) {
+        const std::vector<Placement> all = placements(top);
+        const Flattened flat = flatten(all);
+        for (uint32_t mask : {0x1u, 0x2u, 0x4u, 0x8u, 0xFFFFFFFFu}) {
+            Tally tally;
+            check_rays(*top.scene, all, flat, rays, mask, tally);
+            EXPECT_EQ(tally.wrong + tally.misnamed, 0u) << step << ", mask " << mask << ": " << tally.text.str();
+            EXPECT_EQ(tally.flat_disagree, 0u) << step << ", mask " << mask;
+        }
+    };
+    const auto hits_with = [&](uint32_t mask) {
+        TraceContext context;
+        context.mask = mask;
+        size_t n = 0;
+        for (const Ray& ray : rays) n += top.scene->intersect(ray, context).is_hit();
+        return n;
+    };
+    check("as committed");
+    const size_t all_hits = hits_with(0x1);
+    ASSERT_GT(all_hits, rays.size() / 8);
+    top.scene->set_mask(first, 0x2);  // an instance of the traced scene
+    top.instances[0].mask = 0x2;
+    check("instance mask");
+    one.scene->set_mask(only, 0x3);  // the instanced one-mesh scene's mesh, after the parent committed
+    one.meshes[0].mask = 0x3;
+    check("instanced mesh mask");
+    top.scene->set_mask(floor, 0x4);  // a mesh of the traced scene
+    top.meshes[0].mask = 0x4;
+    check("mesh mask");
+    EXPECT_LT(hits_with(0x1), all_hits);  // the masks did hide something
+    EXPECT_EQ(hits_with(0x8), 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kernels, SceneMaskUpdates, ::testing::Values(Kernel::binary, Kernel::bvh4, Kernel::bvh8));
+
+// A kernel whose layout is made again at refit (binary, quantized bvh8) still answers through the
+// instances that enter it: a refitted then traced scene matches the arbiter on the moved mesh.
+TEST(RenderScene, RefitOfALayoutMadeAgainIsTracedThroughInstances) {
+    for (NodeFormat format : {NodeFormat::full, NodeFormat::quantized})
+        for (Kernel kernel : {Kernel::binary, Kernel::bvh8}) {
+            if (kernel == Kernel::binary && format == NodeFormat::quantized) continue;
+            SceneConfig config;
+            config.tracer.kernel = kernel;
+            config.tracer.node_format = format;
+            std::vector<Triangle> mesh = prefix_of("organic", 2000);
+            const float size = length(bounds_of(mesh).extent());
+            Level leaf(config, "leaf");
+            leaf.mesh(mesh);
+            leaf.scene->commit();
+            Level top(config, "top");
+            top.instance(leaf, placed({1, 1, 0}, 30.0f, {1, 1, 1}, {0, 0, 0}));
+            top.instance(leaf, placed({0, 0, 1}, -75.0f, {0.7f, 1.2f, 1.0f}, {size, 0, 0}, true));
+            top.scene->commit();
+            for (Triangle& t : mesh)
+                for (Vec3* v : {&t.v0, &t.v1, &t.v2}) v->y += 0.3f * v->x * v->x / size;
+            leaf.scene->refit(0);
+            top.scene->refit();
+            const std::vector<Placement> all = placements(top);
+            const Flattened flat = flatten(all);
+            Tally tally;
+            check_rays(*top.scene, all, flat, tools::generate_random_rays(top.scene->bounds(), 500, 5), 0xFFFFFFFFu,
+                       tally);
+            EXPECT_EQ(tally.wrong + tally.misnamed, 0u) << to_string(kernel) << ": " << tally.text.str();
+            EXPECT_EQ(tally.flat_disagree, 0u) << to_string(kernel);
+            EXPECT_GE(tally.hits, 12u);  // the moved mesh is in the rays' way
+        }
+}
+
+// The walks' vectorised ray transform (scene::RayTransform) gives the documented ray of
+// scene::to_instance bit for bit: rotations, mirrors, scales and shears, on rays from tiny to huge
+// coordinates, negative zeros and coordinates whose sums round differently in each order.
+TEST(RenderScene, VectorisedRayTransformIsTheDocumentedOneBitForBit) {
+    uint64_t state = 99;
+    const auto next = [&] {  // splitmix64 in [0, 1)
+        uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+    };
+    const AABB box{{-1, -1, -1}, {1, 1, 1}};
+    size_t compared = 0, rounded_differently = 0;
+    for (int k = 0; k < 200; ++k) {
+        Affine a = placed({float(next() - 0.5), float(next() - 0.5), float(next() + 0.1)}, float(360 * next()),
+                          {float(0.3 + 3 * next()), float(0.3 + 3 * next()), float(0.3 + 3 * next())},
+                          {float(1e4 * (next() - 0.5)), float(next() - 0.5), float(1e-3 * next())}, k % 3 == 0);
+        if (k % 5 == 0) a.m[1] += 0.25f;  // a shear
+        const scene::InstanceTransform xf = scene::make_instance_transform(a, box, {}, "test");
+        const scene::RayTransform vectorised(xf);
+        for (int r = 0; r < 50; ++r) {
+            const float scale = std::ldexp(1.0f, int(60 * next()) - 30);
+            Ray ray;
+            for (int i = 0; i < 3; ++i) {
+                ray.org[i] = float(scale * (next() - 0.5));
+                ray.dir[i] = float(next() - 0.5);
+            }
+            if (r % 7 == 0) ray.dir.y = -0.0f;
+            const Ray want = scene::to_instance(xf, ray), got = vectorised.apply(ray);
+            for (int i = 0; i < 3; ++i) {
+                EXPECT_EQ(std::bit_cast<uint32_t>(got.org[i]), std::bit_cast<uint32_t>(want.org[i])) << k << " " << r;
+                EXPECT_EQ(std::bit_cast<uint32_t>(got.dir[i]), std::bit_cast<uint32_t>(want.dir[i])) << k << " " << r;
+                // Where a float sum would round differently, the double one is being exercised.
+                const float f = xf.inverse[3 * i] * ray.org.x + xf.inverse[3 * i + 1] * ray.org.y +
+                                xf.inverse[3 * i + 2] * ray.org.z + xf.inverse_shift[i];
+                rounded_differently += f != want.org[i];
+            }
+            EXPECT_EQ(got.tmin, ray.tmin);
+            EXPECT_EQ(got.tmax, ray.tmax);
+            ++compared;
+        }
+    }
+    EXPECT_EQ(compared, 10000u);
+    EXPECT_GT(rounded_differently, 1000u);
 }
 
 }  // namespace

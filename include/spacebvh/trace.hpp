@@ -149,6 +149,7 @@ public:
     struct Impl;
 
 private:
+    friend struct TracerInternals;  // the library's own callers of the kernels (src/trace/kernels/kernels.hpp)
     std::unique_ptr<Impl> impl_;
 };
 

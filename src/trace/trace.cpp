@@ -159,8 +159,15 @@ bool Tracer::refit(const MeshView& mesh, const Bvh& bvh) {
         if (trace::refit_wide(*wide4, store.triangles(), bvh)) return true;
     if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl_->layout))
         if (trace::refit_wide(*wide8, store.triangles(), bvh)) return true;
-    *this = Tracer(mesh, bvh, impl_->config);
+    // Into the same Impl, so the layout keeps its address (TracerInternals::entry stays valid).
+    Tracer fresh(mesh, bvh, impl_->config);
+    *impl_ = std::move(*fresh.impl_);
     return false;
+}
+
+trace::KernelEntry TracerInternals::entry(const Tracer& tracer) {
+    const Tracer::Impl& impl = *tracer.impl_;
+    return {impl.single.closest, impl.single.occluded, impl.layout_data()};
 }
 
 Tracer::~Tracer() = default;

@@ -31,4 +31,21 @@ struct PacketKernels {
 };
 PacketKernels packet_kernels(NodeTest test);
 
+// One tracer's single-ray kernel as a caller that traces many rays through many tracers calls it
+// (a scene, per instance entered): the functions and the layout they take, with none of
+// Tracer::intersect's per-call work. The caller keeps the standard floating-point mode
+// (StandardFloatingPointMode) around the calls, as Tracer::intersect does per call. Valid as long
+// as the tracer lives, refits included (Tracer::refit keeps its layout's address).
+struct KernelEntry {
+    bool (*closest)(const void* layout, const Ray& ray, Hit& hit) = nullptr;
+    bool (*occluded)(const void* layout, const Ray& ray, Hit& hit) = nullptr;
+    const void* layout = nullptr;
+};
+
 }  // namespace spacebvh::trace
+
+namespace spacebvh {
+struct TracerInternals {
+    static trace::KernelEntry entry(const Tracer& tracer);
+};
+}  // namespace spacebvh

@@ -133,7 +133,11 @@ void RenderScene::detach(uint32_t id) {
     impl_->committed = false;
 }
 
-void RenderScene::set_mask(uint32_t id, uint32_t mask) { impl_->geometry(id).mask = mask; }
+void RenderScene::set_mask(uint32_t id, uint32_t mask) {
+    impl_->geometry(id).mask = mask;
+    if (id < impl_->record_of.size() && impl_->record_of[id] != kInvalidIndex)
+        impl_->records[impl_->record_of[id]].mask = mask;
+}
 
 void RenderScene::Impl::gather(std::vector<uint32_t>& ids, std::vector<scene::TopLevelItem>& items, uint32_t& depth) {
     depth = 0;
@@ -162,9 +166,60 @@ void RenderScene::Impl::install(scene::TopLevel built, std::vector<uint32_t> ids
     bounds = top.bvh.root().bounds;
     root_padding = top.padding;
     depth = top_depth;
+    make_records();
     list_children();
     ++generation;
     committed = true;
+}
+
+scene::TopRecord RenderScene::Impl::record_of_item(uint32_t item) const {
+    const uint32_t id = item_ids[item];
+    const Geometry& g = geometries[id];
+    scene::TopRecord r;
+    r.mask = g.mask;
+    r.id = id;
+    r.item = item;
+    if (const MeshRecord* mesh = g.mesh()) {
+        r.kind = scene::TopRecord::kMesh;
+        r.mesh = mesh;
+        r.kernel = TracerInternals::entry(*mesh->tracer);
+        return r;
+    }
+    const InstanceRecord& inst = *g.instance();
+    r.to_instance = scene::RayTransform(inst.xf);
+    const Impl& child = *inst.scene->impl_;
+    if (const auto [mesh, mesh_id] = child.only_mesh(); mesh) {
+        // The instance's box, tested on the way down, already bounds the mesh: its scene's one-item
+        // top level is skipped.
+        r.kind = scene::TopRecord::kInstanceOfMesh;
+        r.mesh = mesh;
+        r.mesh_id = mesh_id;
+        r.mesh_mask = &child.geometries[mesh_id].mask;
+        r.kernel = TracerInternals::entry(*mesh->tracer);
+    } else {
+        r.kind = scene::TopRecord::kInstanceOfScene;
+        r.child = &child;
+    }
+    return r;
+}
+
+void RenderScene::Impl::make_records() {
+    records.clear();
+    records.reserve(item_ids.size());
+    record_of.assign(geometries.size(), kInvalidIndex);
+    for (scene::TopNode& node : wide)
+        for (int slot = 0; slot < scene::kTopWidth; ++slot) {
+            if (!(node.valid >> slot & 1u) || !(node.child[slot] & scene::kItemBit)) continue;
+            const BvhNode& leaf = top.bvh.nodes[node.child[slot] & ~scene::kItemBit];
+            node.child[slot] = scene::kItemBit | uint32_t(records.size());
+            for (uint32_t k = 0; k < leaf.reference_count; ++k) {
+                scene::TopRecord r = record_of_item(top.bvh.primitives[leaf.first + k]);
+                r.last = k + 1 == leaf.reference_count;
+                r.test_box = leaf.reference_count > 1;
+                record_of[r.id] = uint32_t(records.size());
+                records.push_back(r);
+            }
+        }
 }
 
 void RenderScene::commit() {
@@ -210,6 +265,7 @@ void RenderScene::refit() {
     }
     scene::refit_top_level(s.top, s.items);
     s.wide = scene::collapse_top_level(s.top.bvh);
+    s.make_records();
     s.bounds = s.top.bvh.root().bounds;
     s.root_padding = s.top.padding;
     s.list_children();
@@ -229,7 +285,8 @@ size_t RenderScene::geometry_count() const {
 
 size_t RenderScene::memory_bytes() const {
     size_t bytes = impl_->top.bvh.nodes.size() * sizeof(BvhNode) + impl_->top.bvh.primitives.size() * sizeof(uint32_t) +
-                   impl_->geometries.size() * sizeof(Geometry);
+                   impl_->geometries.size() * sizeof(Geometry) + impl_->wide.size() * sizeof(scene::TopNode) +
+                   impl_->records.size() * sizeof(scene::TopRecord) + impl_->record_of.size() * sizeof(uint32_t);
     for (const Geometry& g : impl_->geometries)
         if (const MeshRecord* mesh = g.mesh())
             bytes += mesh->tracer->memory_bytes() + mesh->triangles.size() * sizeof(Triangle) +

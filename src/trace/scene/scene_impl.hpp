@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "spacebvh/scene.hpp"
+#include "trace/kernels/kernels.hpp"
 #include "trace/scene/instance_transform.hpp"
 #include "trace/scene/top_level.hpp"
 #include "trace/scene/top_level_wide.hpp"
@@ -47,6 +48,26 @@ struct Geometry {
     const InstanceRecord* instance() const { return std::get_if<InstanceRecord>(&what); }
 };
 
+// What a walk needs of one top-level item, stored in the order the walk reaches the top level's
+// leaves (a wide node's leaf child is kItemBit | its leaf's first record): the geometry's id and
+// mask, and for a mesh or an instance of a one-mesh scene the mesh's kernel entry, so entering an
+// instance reads this record and the mesh's layout, nothing between (docs/scenes.md, "Speed").
+struct TopRecord {
+    enum Kind : uint8_t { kMesh, kInstanceOfMesh, kInstanceOfScene };
+    RayTransform to_instance;  // an instance's (InstanceTransform::inverse, inverse_shift)
+    uint32_t mask = 0;         // the geometry's (RenderScene::set_mask keeps it current)
+    uint32_t id = 0;           // the geometry's id
+    uint32_t item = 0;         // the top-level item (its box, tested when its leaf holds several)
+    uint32_t mesh_id = 0;      // kInstanceOfMesh: the mesh's id in the instanced scene
+    Kind kind = kMesh;
+    bool last = false;                         // the last record of its leaf
+    bool test_box = false;                     // its leaf holds several items: its box was not tested on the way down
+    const MeshRecord* mesh = nullptr;          // kMesh, kInstanceOfMesh
+    const uint32_t* mesh_mask = nullptr;       // kInstanceOfMesh: that mesh's mask in the instanced scene
+    const RenderScene::Impl* child = nullptr;  // kInstanceOfScene
+    trace::KernelEntry kernel;                 // of `mesh`
+};
+
 // The instance ids from the traced scene down to the scene being walked.
 using InstancePath = std::array<uint32_t, kMaxInstanceLevels>;
 
@@ -69,6 +90,8 @@ struct RenderScene::Impl {
     std::vector<scene::TopNode> wide;  // top.bvh collapsed, as the walks take it
     std::vector<uint32_t> item_ids;    // top-level item -> geometry id
     std::vector<scene::TopLevelItem> items;
+    std::vector<scene::TopRecord> records;  // in leaf order (TopRecord)
+    std::vector<uint32_t> record_of;        // geometry id -> its record, kInvalidIndex if none
     AABB bounds;
     scene::Padding root_padding;
     uint32_t depth = 0;
@@ -88,6 +111,9 @@ struct RenderScene::Impl {
     // The live geometries' ids and top-level items as they are now (instances' boxes retaken from
     // their scenes), and the depth below this scene. Throws Error when there is none.
     void gather(std::vector<uint32_t>& ids, std::vector<scene::TopLevelItem>& items, uint32_t& depth);
+    // Makes `records` and points `wide`'s leaf children at them (after every collapse).
+    void make_records();
+    scene::TopRecord record_of_item(uint32_t item) const;
     // Makes `top` (over `items`, of geometries `ids`) the committed top level.
     void install(scene::TopLevel top, std::vector<uint32_t> ids, std::vector<scene::TopLevelItem> items,
                  uint32_t depth);

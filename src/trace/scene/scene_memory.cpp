@@ -17,9 +17,11 @@ namespace {
 constexpr uint64_t kKeptPerReference = sizeof(BvhNode) + sizeof(uint32_t) + 192;
 
 // The top level per instance: its record, its box and padding, its leaf in the binary tree (two nodes
-// per item with one item per leaf) and its id, and a share of the 8-wide collapse (at most one node per two).
+// per item with one item per leaf) and its id, a share of the 8-wide collapse (at most one node per
+// two), and the walk's record of it with its index by id.
 constexpr uint64_t kKeptPerInstance = sizeof(scene::Geometry) + sizeof(scene::TopLevelItem) + sizeof(uint32_t) +
-                                      2 * sizeof(BvhNode) + sizeof(uint32_t) + sizeof(scene::TopNode) / 2;
+                                      2 * sizeof(BvhNode) + sizeof(uint32_t) + sizeof(scene::TopNode) / 2 +
+                                      sizeof(scene::TopRecord) + sizeof(uint32_t);
 constexpr uint64_t kKeptPerScene = 4096;  // the scene object, its name and small vectors
 
 }  // namespace

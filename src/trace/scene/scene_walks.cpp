@@ -20,6 +20,7 @@ using scene::Geometry;
 using scene::InstanceRecord;
 using scene::MeshRecord;
 using scene::QueryState;
+using scene::TopRecord;
 
 // The triangles of one mesh walk that reached the filter. A triangle is in several leaves only after
 // spatial splits; there the walk asks this set before offering a candidate again.
@@ -78,45 +79,40 @@ bool filtered_mesh_walk(const MeshRecord& mesh, uint32_t id, const Ray& ray, Que
     return accepted_any;
 }
 
-void mesh_closest(const MeshRecord& mesh, uint32_t id, const Ray& ray, QueryState& state, SceneHit& best) {
+// A mesh (kernel: its tracer's, scene::TopRecord) traced for the closest hit, `best` kept when nearer.
+void mesh_closest(const MeshRecord& mesh, const trace::KernelEntry& kernel, uint32_t id, const Ray& ray,
+                  QueryState& state, SceneHit& best) {
     if (state.context->filter) {
         filtered_mesh_walk(mesh, id, ray, state, false, best);
         return;
     }
-    const Hit hit = mesh.tracer->intersect(ray);
-    if (hit.is_hit() && (!best.is_hit() || hit.t < best.t))
+    Hit hit;
+    if (kernel.closest(kernel.layout, ray, hit) && (!best.is_hit() || hit.t < best.t))
         best = make_hit(state, id, hit.t, hit.u, hit.v, hit.primitive);
 }
 
-bool mesh_occluded(const MeshRecord& mesh, uint32_t id, const Ray& ray, QueryState& state) {
+bool mesh_occluded(const MeshRecord& mesh, const trace::KernelEntry& kernel, uint32_t id, const Ray& ray,
+                   QueryState& state) {
     if (state.context->filter) {
         SceneHit unused;
         return filtered_mesh_walk(mesh, id, ray, state, true, unused);
     }
-    return mesh.tracer->occluded(ray);
+    Hit unused;
+    return kernel.occluded(kernel.layout, ray, unused);
 }
 
-}  // namespace
-
-namespace {
-
-// Calls on_mesh(mesh, id) or on_instance(instance, id) for each item of a top-level leaf that the mask
-// sees: one per leaf, whose box was tested on the way down, unless the depth limit left more, whose
-// boxes are then tested here. Stops when a call returns true, and returns whether one did.
-template <class OnMesh, class OnInstance>
-bool visit_items(const RenderScene::Impl& s, uint32_t leaf_ref, const scene::BoxRay& ray, float bound, uint32_t mask,
-                 OnMesh&& on_mesh, OnInstance&& on_instance) {
-    const BvhNode& leaf = s.top.bvh.nodes[leaf_ref & ~scene::kItemBit];
-    for (uint32_t k = 0; k < leaf.reference_count; ++k) {
-        const uint32_t item = s.top.bvh.primitives[leaf.first + k];
-        const Geometry& g = s.geometries[s.item_ids[item]];
+// Calls visit(record) for each record of a top-level leaf (scene::TopRecord) that the mask sees: one
+// per leaf, whose box was tested on the way down, unless the depth limit left more, whose boxes are
+// then tested here. Stops when a call returns true, and returns whether one did.
+template <class Visit>
+[[gnu::always_inline]] inline bool visit_records(const RenderScene::Impl& s, uint32_t leaf_ref,
+                                                 const scene::BoxRay& ray, float bound, uint32_t mask, Visit&& visit) {
+    for (const TopRecord* r = &s.records[leaf_ref & ~scene::kItemBit];; ++r) {
         float entry;
-        if (!(g.mask & mask) || (leaf.reference_count > 1 && !scene::meets(ray, s.items[item].box, bound, entry)))
-            continue;
-        const MeshRecord* mesh = g.mesh();
-        if (mesh ? on_mesh(*mesh, s.item_ids[item]) : on_instance(*g.instance(), s.item_ids[item])) return true;
+        if ((r->mask & mask) && (!r->test_box || scene::meets(ray, s.items[r->item].box, bound, entry)) && visit(*r))
+            return true;
+        if (r->last) return false;
     }
-    return false;
 }
 
 }  // namespace
@@ -129,31 +125,25 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
         r.tmax = bound;
         return r;
     };
-    const auto lower = [&] {
-        if (best.is_hit()) bound = std::min(bound, best.t);
-        return false;
-    };
     trace::walk(query, bound, [&](const scene::WideTopQuery::Entry& entry) {
-        return visit_items(
-            *this, entry.ref, query.ray, bound, state.mask,
-            [&](const MeshRecord& mesh, uint32_t id) {
-                mesh_closest(mesh, id, bounded(), state, best);
-                return lower();
-            },
-            [&](const InstanceRecord& inst, uint32_t id) {
-                state.path[level] = id;
-                const Impl& child = *inst.scene->impl_;
-                const Ray local = scene::to_instance(inst.xf, bounded());
+        return visit_records(*this, entry.ref, query.ray, bound, state.mask, [&](const TopRecord& r) {
+            if (r.kind == TopRecord::kMesh) {
+                mesh_closest(*r.mesh, r.kernel, r.id, bounded(), state, best);
+            } else {
+                state.path[level] = r.id;
+                const Ray local = r.to_instance.apply(bounded());
                 if (!scene::is_finite_ray(local)) {
                     // no hit in this instance (docs/scenes.md)
-                } else if (const auto [mesh, mesh_id] = child.only_mesh(); mesh) {
-                    if (child.geometries[mesh_id].mask & state.mask) mesh_closest(*mesh, mesh_id, local, state, best);
+                } else if (r.kind == TopRecord::kInstanceOfMesh) {
+                    if (*r.mesh_mask & state.mask) mesh_closest(*r.mesh, r.kernel, r.mesh_id, local, state, best);
                 } else {
-                    child.closest(local, state, level + 1, best);
+                    r.child->closest(local, state, level + 1, best);
                 }
                 state.path[level] = kInvalidIndex;
-                return lower();
-            });
+            }
+            if (best.is_hit()) bound = std::min(bound, best.t);
+            return false;
+        });
     });
 }
 
@@ -162,24 +152,20 @@ bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t lev
     float bound = ray.tmax;
     bool blocked = false;
     trace::walk(query, bound, [&](const scene::WideTopQuery::Entry& entry) {
-        blocked = visit_items(
-            *this, entry.ref, query.ray, bound, state.mask,
-            [&](const MeshRecord& mesh, uint32_t id) { return mesh_occluded(mesh, id, ray, state); },
-            [&](const InstanceRecord& inst, uint32_t id) {
-                state.path[level] = id;
-                const Impl& child = *inst.scene->impl_;
-                const Ray local = scene::to_instance(inst.xf, ray);
-                bool hit;
-                if (!scene::is_finite_ray(local))
-                    hit = false;  // no hit in this instance (docs/scenes.md)
-                else if (const auto [mesh, mesh_id] = child.only_mesh(); mesh)
-                    hit = (child.geometries[mesh_id].mask & state.mask) && mesh_occluded(*mesh, mesh_id, local, state);
-                else
-                    hit = child.occluded(local, state, level + 1);
-                state.path[level] = kInvalidIndex;
-                return hit;
-            });
-        return blocked;
+        return blocked = visit_records(*this, entry.ref, query.ray, bound, state.mask, [&](const TopRecord& r) {
+                   if (r.kind == TopRecord::kMesh) return mesh_occluded(*r.mesh, r.kernel, r.id, ray, state);
+                   state.path[level] = r.id;
+                   const Ray local = r.to_instance.apply(ray);
+                   bool hit;
+                   if (!scene::is_finite_ray(local))
+                       hit = false;  // no hit in this instance (docs/scenes.md)
+                   else if (r.kind == TopRecord::kInstanceOfMesh)
+                       hit = (*r.mesh_mask & state.mask) && mesh_occluded(*r.mesh, r.kernel, r.mesh_id, local, state);
+                   else
+                       hit = r.child->occluded(local, state, level + 1);
+                   state.path[level] = kInvalidIndex;
+                   return hit;
+               });
     });
     return blocked;
 }
