@@ -81,7 +81,7 @@ uint32_t RenderScene::attach_mesh(const MeshView& mesh, uint32_t mask) {
 uint32_t RenderScene::attach_mesh(const MeshView& mesh, const TreeRecipe& recipe, uint32_t mask) {
     impl_->check_unshared("attach a mesh");
     const uint32_t id = next_id(impl_->geometries, impl_->name);
-    MeshRecord record{mesh, recipe, {}, {}, {}, false};
+    MeshRecord record{mesh, recipe, {}, {}, {}, false, 0.0, {}};
     record.view.named("scene '" + impl_->name + "' mesh " + std::to_string(id) + " ('" + mesh.name() + "')");
     const TriangleStore store(record.view);
     record.triangles.assign(store.triangles().begin(), store.triangles().end());
