@@ -149,6 +149,7 @@ public:
     struct Impl;
 
 private:
+    friend struct TracerAccess;  // the library's scenes refit their meshes' layouts without checking twice
     std::unique_ptr<Impl> impl_;
 };
 
