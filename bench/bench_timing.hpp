@@ -5,12 +5,19 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace spacebvh::bench {
 
 inline double ms_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The median of timings taken elsewhere (a library's own clock); `ms` must not be empty.
+inline double median_of(std::vector<double> ms) {
+    std::sort(ms.begin(), ms.end());
+    return ms[ms.size() / 2];
 }
 
 // The median over `runs` timed calls of `work` (the machines are shared: medians, not means).
@@ -21,8 +28,7 @@ inline double median_ms(int runs, const std::function<void()>& work) {
         work();
         ms.push_back(ms_since(start));
     }
-    std::sort(ms.begin(), ms.end());
-    return ms[ms.size() / 2];
+    return median_of(std::move(ms));
 }
 
 }  // namespace spacebvh::bench

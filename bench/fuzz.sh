@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 goal="${FUZZ_RUNS:-1000000}"
 max_stops="${FUZZ_MAX_STOPS:-20}"
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(obj ply gltf gltf_instances ray_file hit_file tree_file builder_spec)
+[ ${#targets[@]} -eq 0 ] && targets=(obj ply gltf gltf_instances ray_file hit_file tree_file scene_file builder_spec)
 [ -n "${FUZZ_SKIP_BUILD:-}" ] || bash scripts/fuzz-build.sh >/dev/null
 printf '%-13s %10s %8s %6s %9s %5s %7s\n' target executions crashes leaks timeouts ooms seconds
 for target in "${targets[@]}"; do

@@ -52,7 +52,9 @@ std::vector<Triangle> moved(const std::vector<Triangle>& mesh, const std::string
 
 // Embree's refit: a dynamic scene whose one triangle geometry has RTC_BUILD_QUALITY_REFIT, over our
 // vertex buffer; after the vertices change, rtcUpdateGeometryBuffer, rtcCommitGeometry and
-// rtcCommitScene refit it.
+// rtcCommitScene refit it. Embree reads a geometry's build quality only in a scene of build quality
+// LOW (its two-level structure, rtcSetGeometryBuildQuality(3)); in any other scene REFIT is ignored
+// and every commit rebuilds, so the scene is set to LOW here.
 struct EmbreeRefit {
     RTCDevice device = tools::embree_device();
     RTCScene scene = rtcNewScene(device);
@@ -65,6 +67,7 @@ struct EmbreeRefit {
         for (uint32_t i = 0; i < index.size(); ++i) index[i] = i;
         put(mesh);
         rtcSetSceneFlags(scene, RTC_SCENE_FLAG_DYNAMIC);
+        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
         rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_REFIT);
         rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, xyz.data(), 0,
                                    4 * sizeof(float), 3 * mesh.size());
@@ -153,9 +156,7 @@ void growth(const tools::Scene& mesh, size_t ray_count, int runs) {
                 ta.push_back(median_ms(1, [&] { a.intersect(rays, hits); }));
                 tb.push_back(median_ms(1, [&] { b.intersect(rays, hits); }));
             }
-            std::sort(ta.begin(), ta.end());
-            std::sort(tb.begin(), tb.end());
-            const double ma = ta[ta.size() / 2], mb = tb[tb.size() / 2];
+            const double ma = bench::median_of(ta), mb = bench::median_of(tb);
             std::printf("| %s | %.2f | %.2f | %.2f | %.1f | %.1f | %.0f |\n", kind, amount,
                         tools::tree_sah(refitted, cost) / tools::tree_sah(fresh, cost), ma / mb, ma, mb,
                         fresh_build_ms);

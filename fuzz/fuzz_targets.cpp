@@ -2,6 +2,7 @@
 #include "fuzz_targets.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -13,6 +14,7 @@
 #include "spacebvh/trace.hpp"
 #include "spacebvh/tree_file.hpp"
 #include "spacebvh/scene.hpp"
+#include "spacebvh/scene_file.hpp"
 #include "spacebvh/tools/instanced_scene.hpp"
 #include "tools/scene/instanced_internal.hpp"
 #include "tools/scene/scene_internal.hpp"
@@ -66,24 +68,53 @@ void trace_all(const Bvh& bvh) {
     }
 }
 
-void feed_tree_file(std::span<const uint8_t> bytes) {
-    if (bytes.empty()) return;
+// Byte 0 is the mode (low bit: repair the file size field and the checksum, so that the checks behind
+// the checksum are reached); the rest is the file. Shared by the tree_file and scene_file targets.
+std::vector<std::byte> repaired_file(std::span<const uint8_t> bytes, size_t at_file_size, size_t header_size) {
     std::vector<std::byte> file(bytes.size() - 1);
     std::transform(bytes.begin() + 1, bytes.end(), file.begin(), [](uint8_t b) { return std::byte(b); });
     if ((bytes[0] & 1) != 0) {
-        constexpr size_t kAtFileSize = 32, kHeaderSize = 96;
-        if (file.size() >= kHeaderSize) {
+        if (file.size() >= header_size) {
             const uint64_t size = file.size();
-            for (int i = 0; i < 8; ++i) file[kAtFileSize + i] = std::byte(uint8_t(size >> (8 * i)));
+            for (int i = 0; i < 8; ++i) file[at_file_size + i] = std::byte(uint8_t(size >> (8 * i)));
         }
         if (file.size() >= 8) {
             const uint64_t sum = tree_file_detail::checksum(std::span(file).first(file.size() - 8));
             for (int i = 0; i < 8; ++i) file[file.size() - 8 + i] = std::byte(uint8_t(sum >> (8 * i)));
         }
     }
+    return file;
+}
+
+void feed_tree_file(std::span<const uint8_t> bytes) {
+    if (bytes.empty()) return;
+    const std::vector<std::byte> file = repaired_file(bytes, 32, 96);
     TreeFileInfo info;
     const Bvh bvh = deserialize_bvh(file, fuzz_geometry(), "fuzz.sbvh", &info);
     trace_all(bvh);
+}
+
+// A scene file loaded and traced with and without a mask: the loaded meshes, transforms and top levels
+// reach the walks. Hits must name a geometry the loaded scene reports.
+void feed_scene_file(std::span<const uint8_t> bytes) {
+    if (bytes.empty()) return;
+    const std::vector<std::byte> file = repaired_file(bytes, 16, 40);
+    SceneFileInfo info;
+    const std::shared_ptr<RenderScene> scene = deserialize_render_scene(file, "fuzz.sbvh", {}, &info);
+    const std::vector<Ray> rays = tools::generate_random_rays(scene->bounds(), 32, 1);
+    std::vector<SceneHit> hits(rays.size());
+    std::vector<uint8_t> occluded(rays.size());
+    for (const uint32_t mask : {0xFFFFFFFFu, 0x5u}) {
+        scene->intersect(rays, hits, TraceContext{mask});
+        scene->occluded(rays, occluded, TraceContext{mask});
+        for (size_t i = 0; i < rays.size(); ++i) {
+            if (hits[i].is_hit() && hits[i].primitive >= info.triangle_count)
+                throw std::logic_error("fuzz: a loaded scene's hit names triangle " +
+                                       std::to_string(hits[i].primitive));
+            if (hits[i].is_hit() != (occluded[i] != 0) && std::isinf(rays[i].tmax))
+                throw std::logic_error("fuzz: a loaded scene's hit and occlusion answers differ");
+        }
+    }
 }
 
 // A glTF as an instanced scene, built (binned trees, so that a hostile file cannot ask for a slow
@@ -110,8 +141,8 @@ void feed_builder_spec(std::span<const uint8_t> bytes) {
 }  // namespace
 
 const std::vector<std::string>& target_names() {
-    static const std::vector<std::string> names = {"obj",      "ply",      "gltf",      "gltf_instances",
-                                                   "ray_file", "hit_file", "tree_file", "builder_spec"};
+    static const std::vector<std::string> names = {"obj",      "ply",       "gltf",       "gltf_instances", "ray_file",
+                                                   "hit_file", "tree_file", "scene_file", "builder_spec"};
     return names;
 }
 
@@ -131,6 +162,8 @@ void feed(std::string_view target, std::span<const uint8_t> bytes) {
         tools::read_hit_file(memory_stream(bytes), "fuzz.hits");
     else if (target == "tree_file")
         feed_tree_file(bytes);
+    else if (target == "scene_file")
+        feed_scene_file(bytes);
     else if (target == "builder_spec")
         feed_builder_spec(bytes);
     else

@@ -14,13 +14,13 @@
 namespace spacebvh::fuzz {
 
 // obj, ply, gltf (.gltf and GLB bytes), gltf_instances (the same bytes as an instanced scene, built and
-// traced), ray_file, hit_file, tree_file, builder_spec.
+// traced), ray_file, hit_file, tree_file, scene_file (a scene tree file, loaded and traced), builder_spec.
 const std::vector<std::string>& target_names();
 
 // Feeds `bytes` to the reader named `target` and uses what it returns (a loaded tree is traced by
 // every kernel; a parsed builder row is validated). Returns on success, throws spacebvh::Error for a clean rejection;
 // anything else (another exception, a crash, a sanitizer report, a hang) is a bug in the reader.
-// tree_file: byte 0 is a mode; when its low bit is set, the file size field and the checksum of the
+// tree_file and scene_file: byte 0 is a mode; when its low bit is set, the file size field and the checksum of the
 // remaining bytes are repaired first, so that the checks behind the checksum are reached.
 void feed(std::string_view target, std::span<const uint8_t> bytes);
 

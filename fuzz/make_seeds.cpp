@@ -13,6 +13,8 @@
 #include "fuzz_targets.hpp"
 #include "spacebvh/build.hpp"
 #include "spacebvh/presets.hpp"
+#include "spacebvh/scene.hpp"
+#include "spacebvh/scene_file.hpp"
 #include "spacebvh/tools/rays.hpp"
 #include "spacebvh/tools/scene.hpp"
 #include "spacebvh/tree_file.hpp"
@@ -240,6 +242,43 @@ std::string gltf_instanced_bytes(const IndexedMesh& mesh) {
     return json.str();
 }
 
+// Scene files of a few shapes over the fuzz geometry: one mesh; two meshes around a detached slot,
+// traced by bvh4; three levels (a mesh scene instanced rotated and mirrored inside a scene that has
+// a mesh of its own, placed scaled by the root), with masks on every level.
+std::vector<std::pair<std::string, std::vector<std::byte>>> scene_files(const std::vector<Triangle>& geometry) {
+    const std::vector<Triangle> half(geometry.begin(), geometry.begin() + geometry.size() / 2);
+    std::vector<std::pair<std::string, std::vector<std::byte>>> files;
+    auto one = std::make_shared<RenderScene>(SceneConfig{}, "one");
+    one->attach_mesh(MeshView(geometry), 0x1u);
+    one->commit();
+    files.push_back({"one_mesh", serialize_render_scene(*one, "--builder binned")});
+
+    SceneConfig bvh4;
+    bvh4.tracer = TracerConfig{Kernel::bvh4};
+    bvh4.recipe = TreeRecipe::for_builder("spatial");
+    RenderScene two(bvh4, "two");
+    two.attach_mesh(MeshView(half), 0x2u);
+    two.detach(two.attach_mesh(MeshView(geometry)));
+    two.attach_mesh(MeshView(geometry), 0x4u);
+    two.commit();
+    files.push_back({"two_meshes_detached_slot", serialize_render_scene(two)});
+
+    const Affine rotated{{0, -1, 0, 3, 1, 0, 0, -2, 0, 0, 1, 0.5f}};
+    const Affine mirrored{{-1, 0, 0, 9, 0, 1, 0, 0, 0, 0, 1, 0}};
+    const Affine scaled{{2, 0, 0, 0, 0, 0.5f, 0, 1, 0, 0, 3, -1}};
+    auto middle = std::make_shared<RenderScene>(SceneConfig{}, "middle");
+    middle->attach_instance(one, rotated, 0x3u);
+    middle->attach_instance(one, mirrored, 0x4u);
+    middle->attach_mesh(MeshView(half), 0x8u);
+    middle->commit();
+    RenderScene root(SceneConfig{}, "root");
+    root.attach_instance(middle, scaled, 0x5u);
+    root.attach_instance(one, Affine::identity());
+    root.commit();
+    files.push_back({"nested", serialize_render_scene(root, "nested")});
+    return files;
+}
+
 std::string read_bytes(const fs::path& path, size_t limit) {
     std::ifstream in(path, std::ios::binary);
     std::string bytes(limit, '\0');
@@ -305,6 +344,13 @@ int main(int argc, char** argv) {
         const std::string bytes(reinterpret_cast<const char*>(file.data()), file.size());
         write_seed("tree_file", builder + "_checked.sbvh", std::string(1, '\0') + bytes);
         write_seed("tree_file", builder + "_repaired.sbvh", std::string(1, '\1') + bytes);
+    }
+
+    // Scene files, with the same mode byte in front.
+    for (const auto& [name, file] : scene_files(geometry)) {
+        const std::string bytes(reinterpret_cast<const char*>(file.data()), file.size());
+        write_seed("scene_file", name + "_checked.sbvh", std::string(1, '\0') + bytes);
+        write_seed("scene_file", name + "_repaired.sbvh", std::string(1, '\1') + bytes);
     }
 
     // Rows of `compare --builders`.

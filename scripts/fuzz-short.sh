@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-15}"
 bash scripts/fuzz-build.sh
-targets=(obj ply gltf gltf_instances ray_file hit_file tree_file builder_spec)
+targets=(obj ply gltf gltf_instances ray_file hit_file tree_file scene_file builder_spec)
 failed=()
 for target in "${targets[@]}"; do
   corpus=build-sanitized/corpus/$target artifacts=build-sanitized/artifacts/$target

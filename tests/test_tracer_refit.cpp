@@ -7,6 +7,8 @@
 
 #include <cmath>
 
+#include <tbb/task_arena.h>
+
 #include "core/exact_triangle.hpp"
 #include "scene_test_support.hpp"
 #include "spacebvh/build.hpp"
@@ -136,3 +138,50 @@ TEST(TracerRefit, ATreeOfOtherGeometryIsRefused) {
 }
 
 }  // namespace
+
+// Refit runs across the thread's arena (the tree's leaves, the layout's packs and nodes, the scene's
+// copy of the triangles): one thread and four give the same boxes and the same answers, which are
+// the arbiter's on the moved mesh.
+TEST(TracerRefit, TheSameForAnyThreadCount) {
+    const std::vector<Triangle> before = organic(30000);
+    const float size = length(bounds_of(before).extent());
+    const std::vector<Triangle> after = moved(before, "bending", size);
+    const Bvh built = build(MeshView(before), TreeRecipe::for_builder("spatial"));
+    Bvh one = built, four = built;
+    tbb::task_arena(1).execute([&] { refit_boxes(one, after); });
+    tbb::task_arena(4).execute([&] { refit_boxes(four, after); });
+    ASSERT_EQ(one.nodes.size(), four.nodes.size());
+    for (size_t n = 0; n < one.nodes.size(); ++n) {
+        EXPECT_EQ(one.nodes[n].bounds.lo, four.nodes[n].bounds.lo) << n;
+        EXPECT_EQ(one.nodes[n].bounds.hi, four.nodes[n].bounds.hi) << n;
+    }
+    EXPECT_FALSE(one.nodes[0].bounds.lo == built.nodes[0].bounds.lo &&
+                 one.nodes[0].bounds.hi == built.nodes[0].bounds.hi);
+
+    SceneConfig config;
+    config.recipe = TreeRecipe::for_builder("spatial");
+    std::vector<Triangle> a = before, b = before;  // the callers' buffers, moved before the refit
+    RenderScene scene_a(config), scene_b(config);
+    scene_a.attach_mesh(MeshView(a));
+    scene_b.attach_mesh(MeshView(b));
+    scene_a.commit();
+    scene_b.commit();
+    a = after;
+    b = after;
+    tbb::task_arena(1).execute([&] { scene_a.refit(0); });
+    tbb::task_arena(4).execute([&] { scene_b.refit(0); });
+    const std::vector<Ray> rays = tools::generate_random_rays(bounds_of(after), 300, 9);
+    size_t wrong = 0, hits = 0;
+    for (const Ray& ray : rays) {
+        const SceneHit ha = scene_a.intersect(ray), hb = scene_b.intersect(ray);
+        EXPECT_EQ(ha.t, hb.t);
+        EXPECT_EQ(ha.primitive, hb.primitive);
+        const Truth truth = arbiter(after, ray);
+        const tools::HitRecord expected =
+            truth.primitive == kInvalidIndex ? tools::HitRecord{} : tools::HitRecord{float(truth.t), truth.primitive};
+        wrong += !tools::hits_agree({ha.t, ha.primitive}, expected, ray, size);
+        hits += ha.is_hit();
+    }
+    EXPECT_EQ(wrong, 0u);
+    EXPECT_GT(hits, 20u);
+}

@@ -5,6 +5,7 @@
 #include "cli_common.hpp"
 #include "instanced_input.hpp"
 #include "spacebvh/memory_estimate.hpp"
+#include "spacebvh/scene_file.hpp"
 
 namespace spacebvh::cli {
 
@@ -63,6 +64,37 @@ nlohmann::json info_of_instances(const std::string& source, const SceneTransform
             {"load_ms", load_ms}};
 }
 
+// A scene file (build SCENE --save): what it holds, loaded and validated as --tree loads it.
+nlohmann::json info_of_scene_file(const std::string& path) {
+    const auto start = std::chrono::steady_clock::now();
+    SceneFileInfo info;
+    const std::shared_ptr<RenderScene> scene = load_render_scene(path, {}, &info);
+    const double load_ms = milliseconds_since(start);
+    const AABB bounds = scene->bounds();
+    std::printf("scene file  %s (format version %u, scene '%s')\n", path.c_str(), info.format_version,
+                scene->name().c_str());
+    std::printf("scenes      %llu (the saved one and those it instances)\n", (unsigned long long)info.scene_count);
+    std::printf("meshes      %llu (%llu triangles)\n", (unsigned long long)info.mesh_count,
+                (unsigned long long)info.triangle_count);
+    std::printf("instances   %llu (over all its scenes, not multiplied out)\n",
+                (unsigned long long)info.instance_count);
+    std::printf("bounds      (%g, %g, %g) -> (%g, %g, %g)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
+                bounds.hi.y, bounds.hi.z);
+    std::printf("settings    %s\n", info.settings.c_str());
+    std::printf("memory      %s (the loaded scene's layouts)\n", format_bytes(scene->memory_bytes()).c_str());
+    std::printf("load        %.1f ms\n", load_ms);
+    return {{"scene_file", path},
+            {"scene", scene->name()},
+            {"format_version", info.format_version},
+            {"scenes", info.scene_count},
+            {"meshes", info.mesh_count},
+            {"instances", info.instance_count},
+            {"triangles", info.triangle_count},
+            {"settings", info.settings},
+            {"bounds", box_json(bounds)},
+            {"load_ms", load_ms}};
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
@@ -77,13 +109,16 @@ void add_info_command(CLI::App& app) {
         app.add_subcommand("info", "print a scene's triangle count, degenerate triangles, bounds and camera");
     command
         ->add_option("scene", options->source,
-                     "scene file (.obj .ply .gltf .glb), builtin:NAME or an instanced scene (builtin:forest:N)")
+                     "scene file (.obj .ply .gltf .glb), builtin:NAME, an instanced scene (builtin:forest:N) or a "
+                     "scene file that build --save wrote")
         ->required();
     options->scene.add_to(*command);
     add_manifest_option(*command, options->manifest);
     options->common.add_to(*command);
     command->callback([options] {
         const SceneTransform transform = options->scene.transform();
+        if (is_scene_file(options->source))
+            return write_json(options->common.json_path, info_of_scene_file(options->source));
         if (names_instanced_scene(options->source))
             return write_json(options->common.json_path, info_of_instances(options->source, transform));
         const auto start = std::chrono::steady_clock::now();

@@ -31,14 +31,12 @@ struct RenderOptions {
 void render_instances(const RenderOptions& options) {
     if (options.heatmap)
         throw Error("--heatmap: the traversal statistics are the one-mesh kernels'; scenes do not count them");
-    if (options.tree.given())
-        throw Error("--tree: " + options.source + " is an instanced scene; saved trees are one mesh's");
     const InstancedInput input(options.source, options.scene.transform());
     const TreeRecipe recipe = options.build.options(options.build.builder);
     const TracerConfig tracer = instanced_scene_kernel(options.kernel);
     const Camera camera = options.camera.camera.empty() ? input.default_camera() : Camera::parse(options.camera.camera);
     input.check_memory(recipe);
-    const std::shared_ptr<RenderScene> scene = input.build(SceneConfig{recipe, tracer});
+    const std::shared_ptr<RenderScene> scene = scene_for(options.tree, input, SceneConfig{recipe, tracer});
     const uint32_t width = options.camera.width, height = options.camera.height;
     if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide)
         throw Error("--width and --height must be in [1, " + std::to_string(kMaxImageSide) + "]");

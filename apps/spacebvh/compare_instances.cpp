@@ -39,19 +39,22 @@ void make_instanced_ray_sets(SceneComparison& comparison, const RenderScene& tra
 }
 
 // Our row of one builder under one kernel: the RenderScene built --build-runs times (attach every mesh
-// and instance, commit), the last kept.
+// and instance, commit), the last kept; for --tree's row, loaded from the scene file as many times.
 void add_instanced_row(const ComparePlan& plan, SceneComparison& comparison, const BuilderSpec& builder,
                        const std::string& kernel) {
     const SceneConfig config{builder.options, instanced_scene_kernel(kernel)};
     Row& row = comparison.rows.emplace_back();
-    row.name = builder.label + " (C_o=" + number_or_dash(builder.options.cost.overlap_penalty, 2) + ")";
+    row.name = builder.saved_tree
+                   ? plan.options.tree.path
+                   : builder.label + " (C_o=" + number_or_dash(builder.options.cost.overlap_penalty, 2) + ")";
     row.cost = builder.options.cost;
     std::shared_ptr<RenderScene>& scene = comparison.render_scenes.emplace_back();
     for (int run = 0; run < plan.options.build_runs; ++run) {
         scene.reset();
-        const auto start = std::chrono::steady_clock::now();
-        scene = comparison.instanced->build(config);
-        row.build_ms_runs.push_back(milliseconds_since(start));
+        double milliseconds = 0.0;
+        scene = scene_for(builder.saved_tree ? plan.options.tree : TreeOption{}, *comparison.instanced, config,
+                          &milliseconds);
+        row.build_ms_runs.push_back(milliseconds);
         throw_if_interrupted();
     }
     row.build_ms = median(row.build_ms_runs);
@@ -103,8 +106,6 @@ void add_embree_instanced_row(const ComparePlan& plan, SceneComparison& comparis
 }
 
 void load_instanced_comparison(const ComparePlan& plan, SceneComparison& comparison) {
-    if (plan.options.tree.given())
-        throw Error("--tree: " + comparison.source + " is an instanced scene; saved trees are one mesh's");
     comparison.instanced = std::make_unique<InstancedInput>(comparison.source, plan.transform);
     comparison.scene = comparison.instanced->world_box();  // for the camera
     std::vector<TreeRecipe> recipes;  // every row's scene is built and kept before the rays are traced

@@ -3,6 +3,7 @@
 // reached through the same two tables (single rays, packets), so the tracer has one implementation
 // whatever the kernel.
 #include "spacebvh/trace.hpp"
+#include "trace/tracer_access.hpp"
 
 #include <string>
 #include <variant>
@@ -155,13 +156,19 @@ Tracer::Tracer(const MeshView& mesh, const Bvh& bvh, const TracerConfig& request
 bool Tracer::refit(const MeshView& mesh, const Bvh& bvh) {
     const TriangleStore store(mesh);
     check_belongs(store.triangles(), bvh);
-    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl_->layout))
-        if (trace::refit_wide(*wide4, store.triangles(), bvh)) return true;
-    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl_->layout))
-        if (trace::refit_wide(*wide8, store.triangles(), bvh)) return true;
+    return TracerInternals::refit_checked(*this, mesh, store.triangles(), bvh);
+}
+
+bool TracerInternals::refit_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles,
+                                    const Bvh& bvh) {
+    Tracer::Impl& impl = *tracer.impl_;
+    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
+        if (trace::refit_wide(*wide4, triangles, bvh)) return true;
+    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
+        if (trace::refit_wide(*wide8, triangles, bvh)) return true;
     // Into the same Impl, so the layout keeps its address (TracerInternals::entry stays valid).
-    Tracer fresh(mesh, bvh, impl_->config);
-    *impl_ = std::move(*fresh.impl_);
+    Tracer fresh(mesh, bvh, impl.config);
+    impl = std::move(*fresh.impl_);
     return false;
 }
 

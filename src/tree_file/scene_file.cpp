@@ -220,7 +220,7 @@ void read_mesh(Reader& r, RenderScene::Impl& s, uint32_t mask, const std::string
         const std::byte* q = p + 36 * t;
         (*owned)[t] = {vertex(q), vertex(q + 12), vertex(q + 24)};
     }
-    MeshRecord record{MeshView(*owned), s.config.recipe, {}, *owned, {}, false};
+    MeshRecord record{MeshView(*owned), s.config.recipe, {}, *owned, {}, false, 0.0, {}};
     record.view.named(what + " (loaded from " + r.source + ")");
     const TriangleStore checked(record.view);  // NaN / inf coordinates: a clear error naming the triangle
     record.bvh = deserialize_bvh(r.blob(what + "'s tree"), record.triangles, r.source + ": " + what + "'s tree");

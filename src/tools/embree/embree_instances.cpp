@@ -57,6 +57,7 @@ void EmbreeInstancedScene::build_top(std::span<const MeshPlacement> placements, 
         rtcSetSceneBuildQuality(top_, quality == EmbreeQuality::low      ? RTC_BUILD_QUALITY_LOW
                                       : quality == EmbreeQuality::medium ? RTC_BUILD_QUALITY_MEDIUM
                                                                          : RTC_BUILD_QUALITY_HIGH);
+        const auto setup_start = std::chrono::steady_clock::now();
         for (size_t p = 0; p < placements.size(); ++p) {
             const MeshPlacement& placement = placements[p];
             if (placement.mesh >= meshes_.size())
@@ -73,6 +74,8 @@ void EmbreeInstancedScene::build_top(std::span<const MeshPlacement> placements, 
             paths_.push_back(placement.path);
             geometries_.push_back(placement.geometry);
         }
+        top_setup_ms_ =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - setup_start).count();
         check_embree(device, "setting up the instance geometries");
         if (paths_.empty()) throw Error("Embree two-level scene: no visible placement");
         const int64_t bytes_before = embree_allocated_bytes();

@@ -43,9 +43,3 @@ struct KernelEntry {
 };
 
 }  // namespace spacebvh::trace
-
-namespace spacebvh {
-struct TracerInternals {
-    static trace::KernelEntry entry(const Tracer& tracer);
-};
-}  // namespace spacebvh

@@ -2,6 +2,10 @@
 // Refit of a wide layout in place (wide_layout.hpp): the same nodes and packs, boxes and vertices read
 // again from the refitted binary tree and the moved triangles.
 #include <algorithm>
+#include <atomic>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "trace/layout/wide_layout.hpp"
 
@@ -23,35 +27,52 @@ bool lane_used(const TrianglePack& pack, int lane) {
 template <int W>
 bool refit_wide(WideLayout<W>& layout, std::span<const Triangle> triangles, const Bvh& bvh) {
     if (layout.source.size() != layout.nodes.size() * W) return false;
-    // Exactly the triangles that are not degenerate now must be in the packs.
+    // Exactly the triangles that are not degenerate now must be in the packs. Each pass below writes
+    // disjoint slots (a pack, a node, a flag set to 1 by whoever sees it), so the result is the same
+    // for any thread count; a layout that fails the check is discarded by the caller, so the packs
+    // written before the failure is known do not matter.
     std::vector<uint8_t> stored(triangles.size(), 0);
-    for (const TrianglePack& pack : layout.packs)
-        for (int lane = 0; lane < 4; ++lane) {
-            if (!lane_used(pack, lane)) continue;
-            if (triangles[pack.primitive[lane]].is_degenerate()) return false;
-            stored[pack.primitive[lane]] = 1;
-        }
-    for (const uint32_t primitive : bvh.primitives)
-        if (!stored[primitive] && !triangles[primitive].is_degenerate()) return false;
-    for (TrianglePack& pack : layout.packs)
-        for (int lane = 0; lane < 4; ++lane) {
-            if (!lane_used(pack, lane)) continue;
-            const Triangle& t = triangles[pack.primitive[lane]];
-            const Vec3* vertices[3] = {&t.v0, &t.v1, &t.v2};
-            for (int k = 0; k < 3; ++k)
-                for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][lane] = (*vertices[k])[axis];
-        }
-    if (!layout.planes.empty()) layout.planes = make_pack_planes(layout.packs);
-    for (size_t n = 0; n < layout.nodes.size(); ++n)
-        for (int slot = 0; slot < W; ++slot) {
-            const uint32_t from = layout.source[n * W + slot];
-            if (from == kInvalidIndex) continue;
-            const AABB& box = bvh.nodes[from].bounds;
-            for (int axis = 0; axis < 3; ++axis) {
-                layout.nodes[n].planes[2 * axis][slot] = box.lo[axis];
-                layout.nodes[n].planes[2 * axis + 1][slot] = box.hi[axis];
+    std::atomic<bool> changed = false;
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, layout.packs.size(), 2048), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t p = r.begin(); p != r.end() && !changed.load(std::memory_order_relaxed); ++p) {
+                TrianglePack& pack = layout.packs[p];
+                for (int lane = 0; lane < 4; ++lane) {
+                    if (!lane_used(pack, lane)) continue;
+                    const Triangle& t = triangles[pack.primitive[lane]];
+                    if (t.is_degenerate()) changed.store(true, std::memory_order_relaxed);
+                    std::atomic_ref<uint8_t>(stored[pack.primitive[lane]]).store(1, std::memory_order_relaxed);
+                    const Vec3* vertices[3] = {&t.v0, &t.v1, &t.v2};
+                    for (int k = 0; k < 3; ++k)
+                        for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][lane] = (*vertices[k])[axis];
+                }
             }
-        }
+        });
+    if (changed) return false;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, bvh.primitives.size(), 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          bool missing = false;
+                          for (size_t k = r.begin(); k != r.end(); ++k) {
+                              const uint32_t primitive = bvh.primitives[k];
+                              missing |= !stored[primitive] && !triangles[primitive].is_degenerate();
+                          }
+                          if (missing) changed.store(true, std::memory_order_relaxed);
+                      });
+    if (changed) return false;
+    if (!layout.planes.empty()) layout.planes = make_pack_planes(layout.packs);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, layout.nodes.size(), 1024),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t n = r.begin(); n != r.end(); ++n)
+                              for (int slot = 0; slot < W; ++slot) {
+                                  const uint32_t from = layout.source[n * W + slot];
+                                  if (from == kInvalidIndex) continue;
+                                  const AABB& box = bvh.nodes[from].bounds;
+                                  for (int axis = 0; axis < 3; ++axis) {
+                                      layout.nodes[n].planes[2 * axis][slot] = box.lo[axis];
+                                      layout.nodes[n].planes[2 * axis + 1][slot] = box.hi[axis];
+                                  }
+                              }
+                      });
     return true;
 }
 

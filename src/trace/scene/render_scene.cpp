@@ -2,11 +2,18 @@
 // RenderScene: attaching and detaching geometries, commit, refit, and the checks that keep a scene
 // either whole or unchanged (docs/scenes.md, "Errors").
 #include <algorithm>
+#include <atomic>
+#include <bit>
+#include <optional>
 #include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "trace/scene/scene_impl.hpp"
+#include "trace/tracer_access.hpp"
 
 namespace spacebvh {
 
@@ -67,6 +74,23 @@ scene::TopLevelItem RenderScene::Impl::item_of(const Geometry& g) const {
 
 namespace {
 
+// Whether every coordinate is finite (its exponent bits not all set), over blocks in parallel.
+bool all_finite(std::span<const Triangle> triangles) {
+    std::atomic<bool> finite = true;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          uint32_t bad = 0;
+                          for (size_t t = r.begin(); t != r.end(); ++t)
+                              for (int v = 0; v < 3; ++v) {
+                                  const Vec3 p = triangles[t].vertex(v);
+                                  for (float x : {p.x, p.y, p.z})
+                                      bad |= (std::bit_cast<uint32_t>(x) & 0x7F800000u) == 0x7F800000u;
+                              }
+                          if (bad) finite.store(false, std::memory_order_relaxed);
+                      });
+    return finite;
+}
+
 uint32_t next_id(const std::vector<Geometry>& geometries, const std::string& name) {
     if (geometries.size() >= kInvalidIndex) throw Error("scene '" + name + "': out of geometry ids");
     return uint32_t(geometries.size());
@@ -81,7 +105,7 @@ uint32_t RenderScene::attach_mesh(const MeshView& mesh, uint32_t mask) {
 uint32_t RenderScene::attach_mesh(const MeshView& mesh, const TreeRecipe& recipe, uint32_t mask) {
     impl_->check_unshared("attach a mesh");
     const uint32_t id = next_id(impl_->geometries, impl_->name);
-    MeshRecord record{mesh, recipe, {}, {}, {}, false};
+    MeshRecord record{mesh, recipe, {}, {}, {}, false, 0.0, {}};
     record.view.named("scene '" + impl_->name + "' mesh " + std::to_string(id) + " ('" + mesh.name() + "')");
     const TriangleStore store(record.view);
     record.triangles.assign(store.triangles().begin(), store.triangles().end());
@@ -106,16 +130,21 @@ uint32_t RenderScene::attach_instance(std::shared_ptr<const RenderScene> child, 
                                       uint32_t mask) {
     impl_->check_unshared("attach an instance");
     const uint32_t id = next_id(impl_->geometries, impl_->name);
-    const std::string what = impl_->what(id) + " (instance)";
-    if (!child) throw Error(what + ": no scene given");
-    if (child.get() == this) throw Error(what + ": a scene cannot instance itself");
-    if (!child->committed()) throw Error(what + ": scene '" + child->name() + "' is not committed");
+    // The name for errors is made only when one is thrown: attaching 10^6 instances makes none.
+    const auto what = [&] { return impl_->what(id) + " (instance)"; };
+    if (!child) throw Error(what() + ": no scene given");
+    if (child.get() == this) throw Error(what() + ": a scene cannot instance itself");
+    if (!child->committed()) throw Error(what() + ": scene '" + child->name() + "' is not committed");
     const Impl& c = *child->impl_;
     if (c.depth + 1 > kMaxInstanceLevels)
-        throw Error(what + ": scene '" + child->name() + "' nests " + std::to_string(c.depth) +
+        throw Error(what() + ": scene '" + child->name() + "' nests " + std::to_string(c.depth) +
                     " levels already; at most " + std::to_string(kMaxInstanceLevels) + " levels in all");
     InstanceRecord record;
-    record.xf = scene::make_instance_transform(transform, c.bounds, c.root_padding, what);
+    try {
+        record.xf = scene::make_instance_transform(transform, c.bounds, c.root_padding, std::string());
+    } catch (const Error& e) {
+        throw Error(what() + e.what());  // its messages start with ": ", after the name it was given
+    }
     record.transform = transform;
     record.child_generation = c.generation;
     record.scene = std::move(child);
@@ -237,16 +266,27 @@ void RenderScene::refit(uint32_t id) {
     Geometry& g = impl_->geometry(id);
     MeshRecord* mesh = std::get_if<MeshRecord>(&g.what);
     if (!mesh) throw Error(impl_->what(id) + " is an instance: refit() the scene it places, then refit() this one");
-    const TriangleStore store(mesh->view);  // checked (finite coordinates) before anything changes
-    const std::span<const Triangle> moved = store.triangles();
+    // Checked (finite coordinates) before anything changes: a soup in place, in parallel (TriangleStore
+    // then names the first bad triangle); an indexed mesh expanded by TriangleStore.
+    std::optional<TriangleStore> expanded;
+    std::span<const Triangle> moved = mesh->view.soup();
+    if (!mesh->view.is_soup() || !all_finite(moved)) {
+        expanded.emplace(mesh->view);
+        moved = expanded->triangles();
+    }
     if (moved.size() != mesh->triangles.size())
         throw Error(mesh->view.name() + ": refit needs the same triangles, got " + std::to_string(moved.size()) +
                     " instead of " + std::to_string(mesh->triangles.size()));
     // In place: the tree keeps its shape (split references get their triangles' whole boxes), and the
     // kernel's layout keeps its nodes and packing where it can (Tracer::refit).
-    std::copy(moved.begin(), moved.end(), mesh->triangles.begin());
+    // The copy and every pass below run across the calling thread's oneTBB arena; each writes disjoint
+    // parts, so the result is the same for any thread count. The tracer's refit skips the checks
+    // TriangleStore and refit_boxes made.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, moved.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+        std::copy(moved.begin() + r.begin(), moved.begin() + r.end(), mesh->triangles.begin() + r.begin());
+    });
     refit_boxes(mesh->bvh, mesh->triangles);
-    mesh->tracer->refit(MeshView(mesh->triangles), mesh->bvh);
+    TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
     mesh->extent = scene::extent_of(mesh->bvh.root().bounds);
     if (impl_->committed) refit();
 }
