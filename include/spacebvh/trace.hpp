@@ -149,7 +149,7 @@ public:
     struct Impl;
 
 private:
-    friend struct TracerInternals;  // the library's own callers: scenes' kernel entries and refits (src/trace/tracer_access.hpp)
+    friend struct TracerInternals;  // scenes call the kernels and refit directly (src/trace/tracer_access.hpp)
     std::unique_ptr<Impl> impl_;
 };
 
