@@ -7,6 +7,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <map>
@@ -121,6 +123,14 @@ void without_gil(int threads, Work&& work) {
     check_threads(threads);
     py::gil_scoped_release unlocked;
     in_arena(threads, std::forward<Work>(work));
+}
+
+// Runs body(begin, end) over [0, n) in blocks of about `grain` across the calling arena (inside
+// in_arena or without_gil): the answer conversions, each block writing its own rows.
+template <class Body>
+void in_blocks(size_t n, size_t grain, Body&& body) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain),
+                      [&](const tbb::blocked_range<size_t>& range) { body(range.begin(), range.end()); });
 }
 
 // A camera string ('ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy') in the caller's frame, taken into the scene's;

@@ -100,13 +100,6 @@ std::vector<Ray> rays_from_rows(const Frame& frame, const py::handle& rows_arg, 
     return rays_from_arguments(frame, origins, directions, py::float_(tnear), py::float_(tfar), threads);
 }
 
-// Runs body(begin, end) over [0, n) in blocks across the calling arena.
-template <class Body>
-void in_blocks(size_t n, Body&& body) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 13),
-                      [&](const tbb::blocked_range<size_t>& range) { body(range.begin(), range.end()); });
-}
-
 py::dict cast_rays(const GeometryMap& map, const PyTracer& tracer, const py::handle& rows, int threads) {
     map.check_size(tracer.scene.scene->triangles.size(), "the tracer");
     const std::vector<Ray> rays = rays_from_rows(tracer.scene.frame, rows, 0.0, double(kInfinity), threads);
@@ -118,7 +111,7 @@ py::dict cast_rays(const GeometryMap& map, const PyTracer& tracer, const py::han
     without_gil(threads, [&] {
         std::vector<Hit> hits(rays.size());
         tracer.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits));
-        in_blocks(hits.size(), [&](size_t begin, size_t end) {
+        in_blocks(hits.size(), 1 << 13, [&](size_t begin, size_t end) {
             for (size_t i = begin; i < end; ++i) {
                 const Hit& hit = hits[i];
                 const bool is_hit = hit.is_hit();
@@ -178,7 +171,7 @@ py::dict list_intersections(const GeometryMap& map, const PyQueries& queries, co
              *geometry_out = geometry.mutable_data(), *primitive_out = primitive.mutable_data();
     float *uv_out = uvs.mutable_data(), *t_out = t.mutable_data();
     without_gil(threads, [&] {
-        in_blocks(size_t(n) + 1, [&](size_t begin, size_t end) {
+        in_blocks(size_t(n) + 1, 1 << 13, [&](size_t begin, size_t end) {
             for (size_t i = begin; i < end; ++i) split_out[i] = uint32_t(lists.offsets[i]);
         });
         lists.for_each([&](uint64_t k, size_t ray, const ListedHit& hit) {
@@ -200,7 +193,7 @@ py::array_t<float> compute_occupancy(const GeometryMap& map, const PyQueries& qu
     py::array_t<float> result(py::ssize_t(inside.size()));
     float* out = result.mutable_data();
     without_gil(threads, [&] {
-        in_blocks(inside.size(), [&](size_t begin, size_t end) {
+        in_blocks(inside.size(), 1 << 13, [&](size_t begin, size_t end) {
             for (size_t i = begin; i < end; ++i) out[i] = inside[i] ? 1.0f : 0.0f;
         });
     });

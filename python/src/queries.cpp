@@ -139,10 +139,9 @@ py::array_t<int64_t> count_hits(const PyQueries& self, const py::handle& origins
     without_gil(threads, [&] {
         std::vector<uint32_t> counts(rays.size());
         self.queries->count_hits(rays, counts);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, counts.size(), 1 << 14),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                              for (size_t i = range.begin(); i < range.end(); ++i) out[i] = counts[i];
-                          });
+        in_blocks(counts.size(), 1 << 14, [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) out[i] = counts[i];
+        });
     });
     return result;
 }

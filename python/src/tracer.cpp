@@ -21,19 +21,18 @@ py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int t
     int64_t* primitive_out = primitive.mutable_data();
     // t needs no change of frame: the frame moves origins, not directions.
     without_gil(threads, [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, hits.size(), 1 << 13),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                              for (size_t i = range.begin(); i < range.end(); ++i) {
-                                  const Hit& hit = hits[i];
-                                  if (frame.float64)
-                                      static_cast<double*>(t_out)[i] = hit.t;
-                                  else
-                                      static_cast<float*>(t_out)[i] = hit.t;
-                                  primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
-                                  u_out[i] = hit.u;
-                                  v_out[i] = hit.v;
-                              }
-                          });
+        in_blocks(hits.size(), 1 << 13, [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) {
+                const Hit& hit = hits[i];
+                if (frame.float64)
+                    static_cast<double*>(t_out)[i] = hit.t;
+                else
+                    static_cast<float*>(t_out)[i] = hit.t;
+                primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
+                u_out[i] = hit.u;
+                v_out[i] = hit.v;
+            }
+        });
     });
     return py::make_tuple(t, primitive, u, v);
 }
@@ -42,10 +41,9 @@ py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers, int thre
     py::array_t<bool> result(py::ssize_t(answers.size()));
     bool* out = result.mutable_data();
     without_gil(threads, [&] {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, answers.size(), 1 << 14),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                              for (size_t i = range.begin(); i < range.end(); ++i) out[i] = answers[i] != 0;
-                          });
+        in_blocks(answers.size(), 1 << 14, [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) out[i] = answers[i] != 0;
+        });
     });
     return result;
 }
