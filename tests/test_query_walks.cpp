@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // RayQueries' walks per instruction set (src/trace/queries/query_walks.cpp): on a CPU with AVX2 and
 // FMA a layout holds eight-wide nodes and takes the walks compiled for AVX2; the same layout without
-// them takes the baseline's walks over the binary nodes only, as on a CPU without AVX2. Both must give
+// them walks the binary nodes only, as on a CPU without AVX2 (in a portable build, by the baseline's
+// copy of the walks). Both must give
 // the answers of every triangle tested by brute force (intersect_triangle_perturbed), bit for bit, on
 // random rays, rays through vertices and edge midpoints, rays with tmin < 0 and axis-aligned rays.
 #include <gtest/gtest.h>

@@ -42,6 +42,14 @@ struct Walks {
     uint32_t (*count)(const Layout&, const Ray&, std::vector<uint32_t>&);
 };
 
+// A build that targets AVX2 and FMA already (the native one) needs neither the baseline's copy nor
+// the target pragma: its AVX2 walks take layouts without eight-wide nodes over the binary ones.
+#if defined(__AVX2__) && defined(__FMA__)
+#define SPACEBVH_QUERY_WALKS_BASELINE 0
+#else
+#define SPACEBVH_QUERY_WALKS_BASELINE 1
+#endif
+#if SPACEBVH_QUERY_WALKS_BASELINE
 namespace baseline_walks {
 #include "trace/queries/query_walks.inl"
 constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, collect_hits, count_crossings};
@@ -53,6 +61,7 @@ constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, coll
 #pragma GCC push_options
 #pragma GCC target("avx2,fma")
 #endif
+#endif
 // The walk skeleton again, under this target: the baseline's walk() may not inline a node test
 // compiled for AVX2.
 namespace avx2_walks {
@@ -63,6 +72,7 @@ namespace avx2_walks {
 #undef SPACEBVH_QUERY_WALKS_WIDE
 constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, collect_hits, count_crossings};
 }  // namespace avx2_walks
+#if SPACEBVH_QUERY_WALKS_BASELINE
 #if defined(__clang__)
 #pragma clang attribute pop
 #else
@@ -70,6 +80,9 @@ constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, coll
 #endif
 
 const Walks& walks_of(const Layout& layout) { return layout.has_wide ? avx2_walks::kWalks : baseline_walks::kWalks; }
+#else
+const Walks& walks_of(const Layout&) { return avx2_walks::kWalks; }
+#endif
 
 }  // namespace
 
