@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "spacebvh/error.hpp"
+#include "trace/kernels/kernels.hpp"
 
 namespace spacebvh {
 
@@ -90,10 +91,10 @@ RayQueries::Layout::Layout(std::span<const Triangle> triangles, const Bvh& bvh) 
     } else {
         add_node(*this, triangles, bvh, 0, 0);
     }
-#if defined(__AVX2__) && defined(__FMA__)
-    wide = trace::collapse_to_wide<8>(triangles, bvh, WideCollapse::sah_optimal);
-    has_wide = !wide.nodes.empty();
-#endif
+    if (trace::cpu_has(NodeTest::avx2)) {
+        wide = trace::collapse_to_wide<8>(triangles, bvh, WideCollapse::sah_optimal);
+        has_wide = !wide.nodes.empty();
+    }
 }
 
 }  // namespace spacebvh

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // The layout RayQueries walks (queries.hpp): binary nodes with both child boxes side by side and, on
-// CPUs with AVX2 and FMA, the same tree collapsed to eight-wide nodes; leaves as packs of four
+// CPUs that report AVX2 and FMA, the same tree collapsed to eight-wide nodes; leaves as packs of four
 // triangles (triangle_pack.hpp).
 #pragma once
 
@@ -38,12 +38,12 @@ struct RayQueries::Layout {
     trace::TrianglePacks packs;
     size_t triangle_count = 0;
     AABB bounds;  // of every triangle: the grid containment batches are ordered on (coherent_order)
-#if defined(__AVX2__) && defined(__FMA__)
-    // The same tree collapsed to eight-wide nodes (wide_layout.hpp): the walk of every crossing visits
-    // a third of the nodes it visits in the binary layout. Rays with tmin >= 0 only (FusedSlabs).
+    // The same tree collapsed to eight-wide nodes (wide_layout.hpp), on CPUs with AVX2 and FMA (chosen
+    // at run time, whatever the build targets): the walk of every crossing visits a third of the nodes
+    // it visits in the binary layout. Rays with tmin >= 0 only (FusedSlabs). has_wide also picks the
+    // walks compiled for AVX2 (query_walks.cpp).
     trace::WideLayout<8> wide;
     bool has_wide = false;
-#endif
 
     // Lays out the tree over the triangles; throws Error for a vertex that is not finite, a tree that
     // refers to missing triangles or nodes, or one deeper than kStackSize / 2.
