@@ -144,7 +144,7 @@ TEST_F(Cli, BuildWritesConsistentJson) {
 // --quality picks the tree spacebvh::build(mesh, Quality) builds, and excludes --builder and --tree.
 TEST_F(Cli, QualityLevelsAreTheLibrarys) {
     const Scene scene = load_scene("builtin:soup");
-    for (const std::string level : quality_names()) {
+    for (const std::string& level : quality_names()) {
         const CliResult r = run("build builtin:soup --quality " + level + " --no-epo --json q.json");
         ASSERT_EQ(r.exit_code, 0) << r.output;
         const nlohmann::json json = read_json("q.json");

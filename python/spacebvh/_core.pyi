@@ -196,6 +196,19 @@ class Tracer:
         """
         A tracer over `bvh` with a named kernel (kernels(); 'auto' = the fastest single-ray one). Batch calls release the GIL and use `threads` threads (0 = every core) unless they say otherwise.
         """
+    def hits(
+        self,
+        origins: typing.Any,
+        directions: typing.Any,
+        tmin: typing.Any = 0.0,
+        tmax: typing.Any = ...,
+        *,
+        points: bool = True,
+        threads: typing.SupportsInt | typing.SupportsIndex | None = None,
+    ) -> tuple:
+        """
+        Closest hits as intersect(), only of the rays that hit, in ray order: (index_ray int64, primitive int64, points), points (m, 3) in the scene's dtype as Scene.hit_points gives them (None unless `points`).
+        """
     def intersect(
         self,
         origins: typing.Any,

@@ -142,12 +142,8 @@ class RayMeshIntersector:
             index_ray, index_tri, _t, _u, _v, locations = self.queries.all(
                 origins, directions, max_hits=max(int(max_hits), 0), points=return_locations, details=False
             )
-        else:
-            _t, primitive, u, v = self.tracer.intersect(origins, directions)
-            index_ray = np.flatnonzero(primitive >= 0)
-            index_tri = primitive[index_ray]
-            if return_locations:  # in double from the triangle, at the contact's barycentrics
-                locations = self.tracer.scene.hit_points(index_tri, u[index_ray], v[index_ray])
+        else:  # the hits only, locations in double from the triangle at the contact's barycentrics
+            index_ray, index_tri, locations = self.tracer.hits(origins, directions, points=return_locations)
         if return_locations:
             return index_tri, index_ray, locations
         return index_tri, index_ray

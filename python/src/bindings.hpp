@@ -133,6 +133,14 @@ void in_blocks(size_t n, size_t grain, Body&& body) {
                       [&](const tbb::blocked_range<size_t>& range) { body(range.begin(), range.end()); });
 }
 
+// Coordinate `axis` of the point at barycentrics (u, v) of triangle t, in the caller's frame: computed
+// in double from the triangle's corners, so its precision is the mesh's, not that of o + t d in
+// float32. Scene.hit_points and Tracer.hits share it, so their points agree bit for bit.
+inline double point_at(const Triangle& t, double u, double v, const Frame& frame, int axis) {
+    const double w = 1.0 - u - v;
+    return w * double(t.v0[axis]) + u * double(t.v1[axis]) + v * double(t.v2[axis]) + frame.origin[size_t(axis)];
+}
+
 // A camera string ('ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy') in the caller's frame, taken into the scene's;
 // empty: the scene's default camera of docs/rays.md.
 Camera camera_in_frame(const PyScene& scene, const std::string& text);

@@ -123,10 +123,8 @@ py::array hit_points(const PyScene& self, const py::handle& primitive_arg, const
                                       continue;
                                   }
                                   const Triangle& t = triangles[size_t(p(i))];
-                                  const double b1 = uu(i), b2 = vv(i), b0 = 1.0 - b1 - b2;
                                   for (int axis = 0; axis < 3; ++axis)
-                                      out(i, axis) = b0 * double(t.v0[axis]) + b1 * double(t.v1[axis]) +
-                                                     b2 * double(t.v2[axis]) + self.frame.origin[size_t(axis)];
+                                      out(i, axis) = point_at(t, uu(i), vv(i), self.frame, axis);
                               }
                           });
     });

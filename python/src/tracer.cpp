@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // Tracers: a named traversal kernel over a tree, closest and any hits for batches of NumPy rays.
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <numeric>
 #include <optional>
 
 #include "bindings.hpp"
@@ -61,6 +62,66 @@ py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py
     return hits_as_arrays(self.scene.frame, hits, threads);
 }
 
+// The rays that hit, in ray order: (index_ray, primitive, points or None). Filtering the misses and
+// computing the points here, in one pass over the hits, spares a caller that wants only the hits
+// (trimesh's intersects_location) the per-ray arrays and NumPy's filtering and gathers. Blocks of
+// rays count their hits, then write from their prefix offsets: the same order for any thread count.
+py::tuple compact_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
+                       const py::handle& tmin, const py::handle& tmax, bool points, std::optional<int> threads_arg) {
+    constexpr size_t kBlock = size_t(1) << 13;
+    const int threads = threads_for(self, threads_arg);
+    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
+    std::vector<Hit> hits(rays.size());
+    const size_t blocks = (hits.size() + kBlock - 1) / kBlock;
+    std::vector<size_t> offsets(blocks + 1, 0);
+    auto each_block = [&](auto&& work) {
+        in_blocks(blocks, 1, [&](size_t first, size_t last) {
+            for (size_t b = first; b < last; ++b) work(b, b * kBlock, std::min(hits.size(), (b + 1) * kBlock));
+        });
+    };
+    without_gil(threads, [&] {
+        self.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits));
+        each_block([&](size_t b, size_t begin, size_t end) {
+            offsets[b + 1] = size_t(std::count_if(hits.begin() + ptrdiff_t(begin), hits.begin() + ptrdiff_t(end),
+                                                  [](const Hit& hit) { return hit.is_hit(); }));
+        });
+    });
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    const py::ssize_t m = py::ssize_t(offsets.back());
+    const Frame& frame = self.scene.frame;
+    py::array_t<int64_t> index_ray(m), primitive(m);
+    py::object point_array = py::none();
+    void* point_out = nullptr;
+    if (points) {
+        py::array fresh = new_real_array(frame.float64, {m, 3});
+        point_out = fresh.mutable_data();
+        point_array = std::move(fresh);
+    }
+    int64_t* ray_out = index_ray.mutable_data();
+    int64_t* primitive_out = primitive.mutable_data();
+    const std::vector<Triangle>& triangles = self.scene.scene->triangles;
+    without_gil(threads, [&] {
+        each_block([&](size_t b, size_t begin, size_t end) {
+            size_t k = offsets[b];
+            for (size_t i = begin; i < end; ++i) {
+                const Hit& hit = hits[i];
+                if (!hit.is_hit()) continue;
+                ray_out[k] = int64_t(i);
+                primitive_out[k] = int64_t(hit.primitive);
+                for (int axis = 0; point_out && axis < 3; ++axis) {
+                    const double x = point_at(triangles[hit.primitive], hit.u, hit.v, frame, axis);
+                    if (frame.float64)
+                        static_cast<double*>(point_out)[3 * k + size_t(axis)] = x;
+                    else
+                        static_cast<float*>(point_out)[3 * k + size_t(axis)] = float(x);
+                }
+                ++k;
+            }
+        });
+    });
+    return py::make_tuple(index_ray, primitive, point_array);
+}
+
 py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
                            const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
@@ -106,6 +167,11 @@ py::class_<PyTracer> bind_tracer(py::module_& m) {
              "directions (k, 3); either may be one row (3,) or (1, 3) shared by every ray. Returns arrays t (the "
              "scene's dtype, inf on a miss), primitive (int64, -1 on a miss), u, v (float32 barycentrics of the "
              "triangle's second and third corners); Scene.hit_points(primitive, u, v) gives the points.")
+        .def("hits", &compact_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
+             py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("points") = true,
+             py::arg("threads") = py::none(),
+             "Closest hits as intersect(), only of the rays that hit, in ray order: (index_ray int64, primitive int64, "
+             "points), points (m, 3) in the scene's dtype as Scene.hit_points gives them (None unless `points`).")
         .def("occluded", &any_hits, py::arg("origins"), py::arg("directions"), py::arg("tmin") = 0.0,
              py::arg("tmax") = double(kInfinity), py::kw_only(), py::arg("threads") = py::none(),
              "Any hit within [tmin, tmax] (numbers, or arrays of one per ray), rays as for intersect(): a bool array.");
