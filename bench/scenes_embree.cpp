@@ -8,7 +8,7 @@
 // scene flattened into one spatial-split mesh where it fits; and the mesh's refit against its build.
 // Speeds are measurements, never asserted (bench/README.md).
 // Diffuse rays bounce once from the primary hits. With MAX_TOP (>= 1000), top-level build times for
-// 10^3 .. MAX_TOP instances follow.
+// 10^3 .. MAX_TOP instances follow; with RAYS 0, only they are measured.
 // Usage: spacebvh_scenes_bench SCENE INSTANCES RAYS [RUNS [MAX_TOP]]   (SCENE: a file or builtin:NAME)
 #include <algorithm>
 #include <chrono>
@@ -269,6 +269,10 @@ int main(int argc, char** argv) try {
     auto leaf = std::make_shared<RenderScene>(config, "mesh");
     const uint32_t mesh_id = leaf->attach_mesh(mesh.mesh());
     leaf->commit();
+    if (ray_count == 0) {  // the top level's build times alone
+        top_level_scaling(config, leaf, embree_mesh, std::max<size_t>(max_top, 1000), mesh.diagonal(), runs);
+        return 0;
+    }
     std::unique_ptr<tools::EmbreeInstancedScene> embree;
     std::vector<double> embree_top;  // instance geometries' setup + rtcCommitScene, as ours attach + commit
     median_ms(runs, [&] {

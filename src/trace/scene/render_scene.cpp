@@ -59,9 +59,17 @@ void RenderScene::Impl::check_traceable() const {
 
 void RenderScene::Impl::list_children() {
     children.clear();
-    for (uint32_t id : item_ids)
-        if (const InstanceRecord* inst = geometries[id].instance())
-            children.emplace_back(inst->scene.get(), inst->child_generation);
+    // Scenes mostly place a few scenes many times: a short list is searched; past 16 distinct
+    // scenes the rest is taken whole, then sorted and made unique.
+    bool many = false;
+    for (uint32_t id : item_ids) {
+        const InstanceRecord* inst = geometries[id].instance();
+        if (!inst) continue;
+        const std::pair<const RenderScene*, uint64_t> child(inst->scene.get(), inst->child_generation);
+        if (!many && std::find(children.begin(), children.end(), child) != children.end()) continue;
+        children.push_back(child);
+        many = children.size() > 16;
+    }
     std::sort(children.begin(), children.end());
     children.erase(std::unique(children.begin(), children.end()), children.end());
 }
@@ -121,7 +129,7 @@ uint32_t RenderScene::Impl::add_mesh(MeshRecord record, uint32_t mask) {
     TracerConfig tracer = config.tracer;
     tracer.keep_refit_map = true;  // meshes of a scene are refitted in place
     record.tracer = std::make_unique<Tracer>(MeshView(record.triangles), record.bvh, tracer);
-    geometries.push_back({mask, std::move(record)});
+    geometries.push_back({mask, std::make_unique<MeshRecord>(std::move(record))});
     committed = false;
     return id;
 }
@@ -170,14 +178,19 @@ void RenderScene::set_mask(uint32_t id, uint32_t mask) {
 
 void RenderScene::Impl::gather(std::vector<uint32_t>& ids, std::vector<scene::TopLevelItem>& items, uint32_t& depth) {
     depth = 0;
+    ids.reserve(geometries.size());
+    items.reserve(geometries.size());
     for (uint32_t id = 0; id < geometries.size(); ++id) {
         Geometry& g = geometries[id];
         if (!g.alive()) continue;
-        if (InstanceRecord* inst = std::get_if<InstanceRecord>(&g.what)) {
-            // The child's box as it is now (it may have been refitted since it was attached).
+        if (InstanceRecord* inst = g.instance()) {
+            // The child's box as it is now: retaken when the child was committed or refitted since
+            // the box was taken (a generation is bumped by each).
             const Impl& c = *inst->scene->impl_;
-            scene::place_box(inst->xf, c.bounds, c.root_padding);
-            inst->child_generation = c.generation;
+            if (inst->child_generation != c.generation) {
+                scene::place_box(inst->xf, c.bounds, c.root_padding);
+                inst->child_generation = c.generation;
+            }
             depth = std::max(depth, c.depth + 1);
         }
         ids.push_back(id);
@@ -233,22 +246,34 @@ scene::TopRecord RenderScene::Impl::record_of_item(uint32_t item) const {
 }
 
 void RenderScene::Impl::make_records() {
-    records.clear();
-    records.reserve(item_ids.size());
-    record_of.assign(geometries.size(), kInvalidIndex);
+    // The leaves in the order the walks reach them, each slot pointed at its leaf's first record;
+    // then the records, leaf by leaf across the calling thread's oneTBB arena (each writes its own
+    // records and its geometries' record_of entries, so any thread count gives the same).
+    std::vector<std::pair<uint32_t, uint32_t>> leaves;  // (binary leaf, its first record)
+    leaves.reserve(item_ids.size());
+    uint32_t count = 0;
     for (scene::TopNode& node : wide)
         for (int slot = 0; slot < scene::kTopWidth; ++slot) {
             if (!(node.valid >> slot & 1u) || !(node.child[slot] & scene::kItemBit)) continue;
-            const BvhNode& leaf = top.bvh.nodes[node.child[slot] & ~scene::kItemBit];
-            node.child[slot] = scene::kItemBit | uint32_t(records.size());
+            const uint32_t leaf = node.child[slot] & ~scene::kItemBit;
+            node.child[slot] = scene::kItemBit | count;
+            leaves.emplace_back(leaf, count);
+            count += top.bvh.nodes[leaf].reference_count;
+        }
+    records.assign(count, scene::TopRecord{});
+    record_of.assign(geometries.size(), kInvalidIndex);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const BvhNode& leaf = top.bvh.nodes[leaves[i].first];
             for (uint32_t k = 0; k < leaf.reference_count; ++k) {
-                scene::TopRecord r = record_of_item(top.bvh.primitives[leaf.first + k]);
-                r.last = k + 1 == leaf.reference_count;
-                r.test_box = leaf.reference_count > 1;
-                record_of[r.id] = uint32_t(records.size());
-                records.push_back(r);
+                const uint32_t at = leaves[i].second + k;
+                records[at] = record_of_item(top.bvh.primitives[leaf.first + k]);
+                records[at].last = k + 1 == leaf.reference_count;
+                records[at].test_box = leaf.reference_count > 1;
+                record_of[records[at].id] = at;
             }
         }
+    });
 }
 
 void RenderScene::commit() {
@@ -264,7 +289,7 @@ void RenderScene::commit() {
 
 void RenderScene::refit(uint32_t id) {
     Geometry& g = impl_->geometry(id);
-    MeshRecord* mesh = std::get_if<MeshRecord>(&g.what);
+    MeshRecord* mesh = g.mesh();
     if (!mesh) throw Error(impl_->what(id) + " is an instance: refit() the scene it places, then refit() this one");
     // Checked (finite coordinates) before anything changes: a soup in place, in parallel (TriangleStore
     // then names the first bad triangle); an indexed mesh expanded by TriangleStore.
@@ -296,7 +321,7 @@ void RenderScene::refit() {
     if (!s.committed) throw Error("scene '" + s.name + "': refit() needs a committed scene (call commit())");
     for (size_t k = 0; k < s.item_ids.size(); ++k) {
         Geometry& g = s.geometries[s.item_ids[k]];
-        if (InstanceRecord* inst = std::get_if<InstanceRecord>(&g.what)) {
+        if (InstanceRecord* inst = g.instance()) {
             const Impl& c = *inst->scene->impl_;
             scene::place_box(inst->xf, c.bounds, c.root_padding);
             inst->child_generation = c.generation;

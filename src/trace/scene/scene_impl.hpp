@@ -39,13 +39,20 @@ struct InstanceRecord {
     uint64_t child_generation = 0;  // the child's generation when the box was taken
 };
 
+// A mesh record is large and rare, an instance record small and possibly one of millions: the mesh
+// is held through a pointer (which also keeps its address fixed for TopRecord::mesh) so that a
+// geometry is an instance's size.
 struct Geometry {
     uint32_t mask = 0xFFFFFFFFu;
-    std::variant<std::monostate, MeshRecord, InstanceRecord> what;  // monostate: detached
+    std::variant<std::monostate, std::unique_ptr<MeshRecord>, InstanceRecord> what;  // monostate: detached
 
     bool alive() const { return what.index() != 0; }
-    const MeshRecord* mesh() const { return std::get_if<MeshRecord>(&what); }
+    MeshRecord* mesh() const {
+        const auto* mesh = std::get_if<std::unique_ptr<MeshRecord>>(&what);
+        return mesh ? mesh->get() : nullptr;
+    }
     const InstanceRecord* instance() const { return std::get_if<InstanceRecord>(&what); }
+    InstanceRecord* instance() { return std::get_if<InstanceRecord>(&what); }
 };
 
 // What a walk needs of one top-level item, stored in the order the walk reaches the top level's

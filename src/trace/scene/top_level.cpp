@@ -1,16 +1,16 @@
 // SPDX-License-Identifier: MIT
-// The top level of a scene: built by our binned builder over its geometries' boxes, refitted in place.
+// The top level of a scene: refitted in place, collapsed into wide nodes, and stored as flat triangles
+// (its build: top_level_build.cpp).
 #include "trace/scene/top_level.hpp"
+
+#include <algorithm>
+#include <array>
 
 #include "trace/scene/top_level_wide.hpp"
 
-#include "spacebvh/build.hpp"
-
 namespace spacebvh::scene {
 
-namespace {
-
-void measure(TopLevel& top, std::span<const TopLevelItem> items) {
+void measure_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
     top.padding = {};
     for (const TopLevelItem& item : items) {
         top.padding.pad0 = std::max(top.padding.pad0, item.padding.pad0);
@@ -19,28 +19,15 @@ void measure(TopLevel& top, std::span<const TopLevelItem> items) {
     top.extent = extent_of(top.bvh.root().bounds);
 }
 
-}  // namespace
-
 std::vector<Triangle> top_level_triangles(std::span<const TopLevelItem> items) {
-    // One triangle per box with two opposite corners as vertices: its bounds are the box exactly, and
-    // the object-partitioning binned builder never clips it, so each item is in exactly one leaf.
+    // One triangle per box with two opposite corners as vertices: its bounds are the box exactly, so a
+    // tree file's checks of a tree over them hold for the top level's tree.
     std::vector<Triangle> boxes(items.size());
     for (size_t i = 0; i < items.size(); ++i) {
         const AABB& b = items[i].box;
         boxes[i] = {b.lo, b.hi, Vec3{b.lo.x, b.hi.y, b.lo.z}};
     }
     return boxes;
-}
-
-TopLevel build_top_level(std::span<const TopLevelItem> items) {
-    const std::vector<Triangle> boxes = top_level_triangles(items);
-    BuildConfig config = BuildConfig::for_preset(Preset::binned);
-    // One item per leaf: its box is then tested once, on the way down, and a leaf is one walk.
-    config.limits.max_leaf_size = 1;
-    TopLevel top;
-    top.bvh = build(MeshView(boxes).named("top level"), config);
-    measure(top, items);
-    return top;
 }
 
 void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
@@ -55,35 +42,40 @@ void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items) {
         }
         node.bounds = box;
     }
-    measure(top, items);
+    measure_top_level(top, items);
 }
 
 namespace {
 
-// Emits the node whose children are `slots` (binary node indices), then their subtrees.
-uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode>& out) {
+// Emits the node whose children are slots[0, count) (binary node indices), then their subtrees.
+uint32_t emit(const Bvh& bvh, std::array<uint32_t, kTopWidth> slots, int count, std::vector<TopNode>& out) {
     // Open the inner child of largest area until kTopWidth children (Embree's collapse rule).
-    while (slots.size() < size_t(kTopWidth)) {
+    while (count < kTopWidth) {
         int widest = -1;
-        for (int k = 0; k < int(slots.size()); ++k)
-            if (!bvh.nodes[slots[k]].is_leaf() &&
-                (widest < 0 || bvh.nodes[slots[k]].bounds.area() > bvh.nodes[slots[widest]].bounds.area()))
-                widest = k;
+        float widest_area = 0.0f;
+        for (int k = 0; k < count; ++k) {
+            const BvhNode& node = bvh.nodes[slots[k]];
+            if (node.is_leaf()) continue;
+            const float area = node.bounds.area();
+            if (widest < 0 || area > widest_area) widest = k, widest_area = area;
+        }
         if (widest < 0) break;
         const uint32_t first = bvh.nodes[slots[widest]].first;
+        std::copy_backward(slots.begin() + widest + 1, slots.begin() + count, slots.begin() + count + 1);
         slots[widest] = first;
-        slots.insert(slots.begin() + widest + 1, first + 1);
+        slots[widest + 1] = first + 1;
+        ++count;
     }
     const uint32_t index = uint32_t(out.size());
     out.emplace_back();
-    for (size_t k = 0; k < slots.size(); ++k) {
+    for (int k = 0; k < count; ++k) {
         const BvhNode& child = bvh.nodes[slots[k]];
         for (int i = 0; i < 3; ++i) {
             out[index].lo[i][k] = child.bounds.lo[i];
             out[index].hi[i][k] = child.bounds.hi[i];
         }
         out[index].valid |= 1u << k;
-        const uint32_t ref = child.is_leaf() ? kItemBit | slots[k] : emit(bvh, {child.first, child.first + 1}, out);
+        const uint32_t ref = child.is_leaf() ? kItemBit | slots[k] : emit(bvh, {child.first, child.first + 1}, 2, out);
         out[index].child[k] = ref;
     }
     return index;
@@ -93,8 +85,13 @@ uint32_t emit(const Bvh& bvh, std::vector<uint32_t> slots, std::vector<TopNode>&
 
 std::vector<TopNode> collapse_top_level(const Bvh& bvh) {
     std::vector<TopNode> nodes;
+    // About one wide node per four items (each holds up to eight children, leaves and nodes).
+    nodes.reserve(bvh.primitives.size() / 4 + 1);
     const BvhNode& root = bvh.root();
-    emit(bvh, root.is_leaf() ? std::vector<uint32_t>{0} : std::vector<uint32_t>{root.first, root.first + 1}, nodes);
+    if (root.is_leaf())
+        emit(bvh, {0}, 1, nodes);
+    else
+        emit(bvh, {root.first, root.first + 1}, 2, nodes);
     return nodes;
 }
 

@@ -27,12 +27,14 @@ struct TopLevel {
     double extent = 0.0;  // extent_of(the root's box)
 };
 
-// The binned SAH tree over the items' boxes (built by build() over one flat triangle per box, whose
-// bounds are the box exactly), or refitted to their current boxes.
+// The binned SAH tree over the items' boxes, one item per leaf and at most 64 levels, the same for any
+// thread count (top_level_build.cpp); or refitted to their current boxes.
 TopLevel build_top_level(std::span<const TopLevelItem> items);
 // Those flat triangles, one per item (a scene file's top level is stored as a tree over them).
 std::vector<Triangle> top_level_triangles(std::span<const TopLevelItem> items);
 void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items);
+// Sets the padding and extent of `top` from its root box and the items.
+void measure_top_level(TopLevel& top, std::span<const TopLevelItem> items);
 
 // The ray as the box tests of one walk need it. Every box is grown by one allowance `grow`: the
 // tree's largest padding for this ray's origin, plus 2^-20 of the largest coordinate of the tree's
