@@ -9,15 +9,30 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "core/exact_triangle.hpp"
+#include "spacebvh/error.hpp"
 #include "spacebvh/scene.hpp"
 #include "spacebvh/tools/verify.hpp"
 #include "test_support.hpp"
 #include "trace/scene/instance_transform.hpp"
 
 namespace spacebvh::scene_testing {
+
+// Expects f() to throw Error whose message holds `part`.
+template <class F>
+void expect_error(F&& f, const std::string& part) {
+    try {
+        f();
+        ADD_FAILURE() << "no error; expected one mentioning '" << part << "'";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    }
+}
 
 // The first `count` triangles of the built-in organic mesh.
 inline std::vector<Triangle> organic(size_t count) {

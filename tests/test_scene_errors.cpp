@@ -11,22 +11,14 @@
 #include <vector>
 
 #include "spacebvh/error.hpp"
+#include "scene_test_support.hpp"
 #include "spacebvh/scene.hpp"
 
 using namespace spacebvh;
 
 namespace {
 
-// Throws Error whose message holds `part`.
-template <class F>
-void expect_error(F&& f, const std::string& part) {
-    try {
-        f();
-        ADD_FAILURE() << "no error; expected one mentioning '" << part << "'";
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
-    }
-}
+using scene_testing::expect_error;
 
 const std::vector<Triangle>& square() {
     static const std::vector<Triangle> t = {{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}};

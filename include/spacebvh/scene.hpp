@@ -65,6 +65,14 @@ struct TraceContext {
     void* user = nullptr;
 };
 
+// One instance of a batch (RenderScene::attach_instances): the batch's scenes[scene] placed by
+// `transform`, seen by rays whose mask meets `mask`.
+struct InstancePlacement {
+    uint32_t scene = 0;  // an index into the batch's scenes
+    Affine transform;
+    uint32_t mask = 0xFFFFFFFFu;
+};
+
 // How a scene builds the trees of its meshes and which kernel traces them.
 struct SceneConfig {
     TreeRecipe recipe = TreeRecipe::for_builder("binned");  // each mesh's tree (our builders or a tree file)
@@ -93,6 +101,12 @@ public:
     // uncommitted or empty scene, nesting deeper than kMaxInstanceLevels, or this very scene.
     uint32_t attach_instance(std::shared_ptr<const RenderScene> scene, const Affine& transform,
                              uint32_t mask = 0xFFFFFFFFu);
+    // attach_instance for each placement, its transforms checked across the calling thread's oneTBB
+    // arena: the ids are consecutive, the first returned (the next id when `placements` is empty).
+    // Throws Error naming the first bad scene (by its index in `scenes`) or placement (by its index
+    // in `placements`: a scene index out of range, a bad transform); the scene is unchanged then.
+    uint32_t attach_instances(std::span<const std::shared_ptr<const RenderScene>> scenes,
+                              std::span<const InstancePlacement> placements);
     // Throws Error for an unknown id, or when committed scenes instance this one.
     void detach(uint32_t id);
     void set_mask(uint32_t id, uint32_t mask);

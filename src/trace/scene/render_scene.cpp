@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -134,31 +135,44 @@ uint32_t RenderScene::Impl::add_mesh(MeshRecord record, uint32_t mask) {
     return id;
 }
 
+void RenderScene::Impl::check_child(const RenderScene& self, const RenderScene* child,
+                                    const std::function<std::string()>& what) const {
+    if (!child) throw Error(what() + ": no scene given");
+    if (child == &self) throw Error(what() + ": a scene cannot instance itself");
+    if (!child->committed()) throw Error(what() + ": scene '" + child->name() + "' is not committed");
+    const uint32_t levels = child->impl_->depth;
+    if (levels + 1 > kMaxInstanceLevels)
+        throw Error(what() + ": scene '" + child->name() + "' nests " + std::to_string(levels) +
+                    " levels already; at most " + std::to_string(kMaxInstanceLevels) + " levels in all");
+}
+
+void RenderScene::Impl::add_instance(std::shared_ptr<const RenderScene> child, const Affine& transform,
+                                     const scene::InstanceTransform& xf, uint32_t mask) {
+    InstanceRecord record;
+    record.xf = xf;
+    record.transform = transform;
+    record.child_generation = child->impl_->generation;
+    ++child->impl_->instanced_by;
+    record.scene = std::move(child);
+    geometries.push_back({mask, std::move(record)});
+    committed = false;
+}
+
 uint32_t RenderScene::attach_instance(std::shared_ptr<const RenderScene> child, const Affine& transform,
                                       uint32_t mask) {
     impl_->check_unshared("attach an instance");
     const uint32_t id = next_id(impl_->geometries, impl_->name);
     // The name for errors is made only when one is thrown: attaching 10^6 instances makes none.
     const auto what = [&] { return impl_->what(id) + " (instance)"; };
-    if (!child) throw Error(what() + ": no scene given");
-    if (child.get() == this) throw Error(what() + ": a scene cannot instance itself");
-    if (!child->committed()) throw Error(what() + ": scene '" + child->name() + "' is not committed");
+    impl_->check_child(*this, child.get(), what);
     const Impl& c = *child->impl_;
-    if (c.depth + 1 > kMaxInstanceLevels)
-        throw Error(what() + ": scene '" + child->name() + "' nests " + std::to_string(c.depth) +
-                    " levels already; at most " + std::to_string(kMaxInstanceLevels) + " levels in all");
-    InstanceRecord record;
+    scene::InstanceTransform xf;
     try {
-        record.xf = scene::make_instance_transform(transform, c.bounds, c.root_padding, std::string());
+        xf = scene::make_instance_transform(transform, c.bounds, c.root_padding, std::string());
     } catch (const Error& e) {
         throw Error(what() + e.what());  // its messages start with ": ", after the name it was given
     }
-    record.transform = transform;
-    record.child_generation = c.generation;
-    record.scene = std::move(child);
-    ++c.instanced_by;
-    impl_->geometries.push_back({mask, std::move(record)});
-    impl_->committed = false;
+    impl_->add_instance(std::move(child), transform, xf, mask);
     return id;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -113,6 +114,12 @@ struct RenderScene::Impl {
     void check_unshared(const char* action) const;
     scene::TopLevelItem item_of(const scene::Geometry& g) const;
     void list_children();
+    // Throws Error starting with what() when `child` cannot be instanced by `self` (none, itself,
+    // uncommitted, nested too deep).
+    void check_child(const RenderScene& self, const RenderScene* child, const std::function<std::string()>& what) const;
+    // Adds an instance of a checked child whose transform `xf` was made from `transform`.
+    void add_instance(std::shared_ptr<const RenderScene> child, const Affine& transform,
+                      const scene::InstanceTransform& xf, uint32_t mask);
     // Adds a mesh whose view, triangles and tree are set: lays it out for the kernel. Returns its id.
     uint32_t add_mesh(scene::MeshRecord record, uint32_t mask);
     // The live geometries' ids and top-level items as they are now (instances' boxes retaken from

@@ -22,17 +22,19 @@ namespace spacebvh::scene {
 namespace {
 
 constexpr int kBins = 32;
-constexpr size_t kChunk = size_t(1) << 12;      // items per chunk of a chunked pass (fixed: determinism)
+constexpr size_t kChunk = size_t(1) << 12;        // items per chunk of a chunked pass (fixed: determinism)
 constexpr size_t kChunkedPass = size_t(1) << 15;  // nodes this large bin and partition in chunks
 constexpr size_t kTaskItems = size_t(1) << 10;    // subtrees this large are built as tasks
-constexpr uint32_t kMaxDepth = 63;               // the walks' stacks hold 64 levels (top_level_wide.hpp)
+constexpr uint32_t kMaxDepth = 63;                // the walks' stacks hold 64 levels (top_level_wide.hpp)
 
 // An item's box and, in lo's fourth lane, its index (bits); hi's fourth lane is unused.
 struct alignas(16) Ref {
     __m128 lo, hi;
 };
 
-__m128 centroid(const Ref& r) { return _mm_add_ps(_mm_mul_ps(r.lo, _mm_set1_ps(0.5f)), _mm_mul_ps(r.hi, _mm_set1_ps(0.5f))); }
+__m128 centroid(const Ref& r) {
+    return _mm_add_ps(_mm_mul_ps(r.lo, _mm_set1_ps(0.5f)), _mm_mul_ps(r.hi, _mm_set1_ps(0.5f)));
+}
 
 // A box and a centroid box, grown by min and max (exact, so any merge order gives the same result).
 struct Bounds {
