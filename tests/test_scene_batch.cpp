@@ -27,7 +27,8 @@ using Random = tools::SplitMix64;
 
 // A rotation about a random axis, scales in [0.5, 2], every third mirrored, on a grid `spacing` apart.
 Affine placement(Random& random, size_t k, float spacing) {
-    const double ax = double(random.uniform()) - 0.5, ay = double(random.uniform()) - 0.5, az = double(random.uniform()) + 0.1;
+    const double ax = double(random.uniform()) - 0.5, ay = double(random.uniform()) - 0.5,
+                 az = double(random.uniform()) + 0.1;
     const double norm = std::sqrt(ax * ax + ay * ay + az * az), x = ax / norm, y = ay / norm, z = az / norm;
     const double angle = double(random.uniform()) * 6.283185307179586, c = std::cos(angle), s = std::sin(angle);
     const double r[3][3] = {{c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s},
@@ -127,7 +128,8 @@ TEST(SceneBatch, ErrorsNameTheFirstBadEntryAndLeaveTheSceneUnchanged) {
     expect_error([&] { top.attach_instances(scenes, batch); }, "placements[3000] (would be geometry 3001)");
     expect_error([&] { top.attach_instances(scenes, batch); }, "entry (1, 3) is not finite");
     batch[3000].transform.m[7] = 1.0f;
-    expect_error([&] { top.attach_instances(scenes, batch); }, "placements[4100] (would be geometry 4101): transform is singular");
+    expect_error([&] { top.attach_instances(scenes, batch); },
+                 "placements[4100] (would be geometry 4101): transform is singular");
     auto open = std::make_shared<RenderScene>(SceneConfig{}, "open");
     open->attach_mesh(MeshView(square()));
     const std::vector<std::shared_ptr<const RenderScene>> with_open{square_scene, open}, with_null{square_scene, {}};
@@ -184,8 +186,10 @@ TEST(SceneBatch, TopLevelBuildIsValidAndTheSameForAnyThreadCount) {
     for (size_t i = 0; i < items.size(); ++i) {
         // Clustered and spread boxes, some identical, some far out, a few flat.
         const double scale = i % 10 == 0 ? 1e6 : 100.0;
-        const Vec3 lo(float(scale * double(random.uniform())), float(scale * double(random.uniform())), float(100 * double(random.uniform())));
-        const Vec3 size(float(double(random.uniform())), float(double(random.uniform())), i % 13 == 0 ? 0.0f : float(double(random.uniform())));
+        const Vec3 lo(float(scale * double(random.uniform())), float(scale * double(random.uniform())),
+                      float(100 * double(random.uniform())));
+        const Vec3 size(float(double(random.uniform())), float(double(random.uniform())),
+                        i % 13 == 0 ? 0.0f : float(double(random.uniform())));
         items[i].box = i % 7 == 0 && i > 0 ? items[i - 1].box : AABB{lo, lo + size};
     }
     tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 4);  // more threads than cores

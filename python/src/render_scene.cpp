@@ -69,24 +69,27 @@ Affine transform_of(const py::handle& arg) {
     return Affine::from_4x4(std::span<const float, 16>(rows));
 }
 
-// One mask for every ray (a Python int) or one per ray (a 1-D integer array).
-std::vector<uint32_t> masks_of(const py::handle& arg, size_t rays, uint32_t& shared) {
+// One mask for every ray (a Python int) or one per ray (a 1-D integer array); `arg_name` and `item`
+// name the argument and what it gives masks to ("mask" and "ray" for traces).
+std::vector<uint32_t> masks_of(const py::handle& arg, size_t count, uint32_t& shared,
+                               const std::string& arg_name = "mask", const std::string& item = "ray") {
     if (py::isinstance<py::int_>(arg)) {
-        shared = mask_of(arg, "mask");
+        shared = mask_of(arg, arg_name.c_str());
         return {};
     }
     const auto array = py::array::ensure(arg);
     if (!array || (array.dtype().kind() != 'i' && array.dtype().kind() != 'u'))
-        throw py::type_error("mask: expected an int or a 1-D array of integers");
-    if (array.ndim() != 1 || size_t(array.shape(0)) != rays)
-        throw Error("mask: " + std::to_string(array.ndim() == 1 ? array.shape(0) : -1) + " masks for " +
-                    std::to_string(rays) + " rays (give one per ray, or one int)");
+        throw py::type_error(arg_name + ": expected an int or a 1-D array of integers");
+    if (array.ndim() != 1 || size_t(array.shape(0)) != count)
+        throw Error(arg_name + ": " + std::to_string(array.ndim() == 1 ? array.shape(0) : -1) + " masks for " +
+                    std::to_string(count) + " " + item + "s (give one per " + item + ", or one int)");
     const auto values = py::array_t<long long, py::array::forcecast>::ensure(array);
-    std::vector<uint32_t> masks(rays);
-    for (size_t i = 0; i < rays; ++i) {
+    std::vector<uint32_t> masks(count);
+    for (size_t i = 0; i < count; ++i) {
         const long long m = values.at(py::ssize_t(i));
         if (m < 0 || m > 0xFFFFFFFFll)
-            throw Error("mask: ray " + std::to_string(i) + " has " + std::to_string(m) + ", outside [0, 2^32)");
+            throw Error(arg_name + ": " + item + " " + std::to_string(i) + " has " + std::to_string(m) +
+                        ", outside [0, 2^32)");
         masks[i] = uint32_t(m);
     }
     return masks;
@@ -151,6 +154,56 @@ uint32_t attach_mesh(PyRenderScene& self, const PyScene& mesh, const py::handle&
     }
 }
 
+// transforms (n, 3, 4) or (n, 4, 4), scene_index None or n integers, masks one int or n integers: one
+// placement each; an error names the placement's index. Returns the n ids.
+py::array_t<int64_t> attach_instances(PyRenderScene& self, const py::handle& scenes_arg, const py::handle& transforms,
+                                      const py::handle& scene_index, const py::handle& masks_arg) {
+    std::vector<std::shared_ptr<const RenderScene>> scenes;
+    if (py::isinstance<PyRenderScene>(scenes_arg))
+        scenes.push_back(scenes_arg.cast<const PyRenderScene&>().scene);
+    else
+        for (const py::handle item : scenes_arg.cast<py::sequence>())
+            scenes.push_back(item.cast<const PyRenderScene&>().scene);
+    const auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(transforms);
+    if (!array || array.ndim() != 3 || array.shape(2) != 4 || (array.shape(1) != 3 && array.shape(1) != 4))
+        throw Error("transforms: expected an (n, 3, 4) or (n, 4, 4) array of numbers");
+    const size_t n = size_t(array.shape(0)), rows = size_t(array.shape(1));
+    std::vector<InstancePlacement> placements(n);
+    for (size_t k = 0; k < n; ++k) {
+        float m[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+        for (size_t i = 0; i < rows * 4; ++i) m[i] = float(array.data()[k * rows * 4 + i]);
+        try {
+            placements[k].transform = Affine::from_4x4(std::span<const float, 16>(m));
+        } catch (const Error& e) {
+            throw Error("transforms[" + std::to_string(k) + "]: " + e.what());
+        }
+    }
+    if (!scene_index.is_none()) {
+        const auto index = py::array_t<long long, py::array::forcecast>::ensure(scene_index);
+        if (!index || index.ndim() != 1 || size_t(index.shape(0)) != n)
+            throw Error("scene_index: expected " + std::to_string(n) + " integers, one per transform");
+        for (size_t k = 0; k < n; ++k) {
+            const long long i = index.at(py::ssize_t(k));
+            if (i < 0 || i >= (long long)scenes.size())
+                throw Error("scene_index[" + std::to_string(k) + "]: " + std::to_string(i) + ", not in [0, " +
+                            std::to_string(scenes.size()) + ")");
+            placements[k].scene = uint32_t(i);
+        }
+    }
+    uint32_t shared = 0xFFFFFFFFu;
+    const std::vector<uint32_t> masks = masks_of(masks_arg, n, shared, "masks", "transform");
+    for (size_t k = 0; k < n; ++k) placements[k].mask = masks.empty() ? shared : masks[k];
+    uint32_t first;
+    {
+        py::gil_scoped_release unlocked;
+        first = self.scene->attach_instances(scenes, placements);
+    }
+    self.by_id.resize(first + n, nullptr);
+    py::array_t<int64_t> ids(py::ssize_t(n));
+    for (size_t k = 0; k < n; ++k) ids.mutable_data()[k] = int64_t(first + k);
+    return ids;
+}
+
 void refit(PyRenderScene& self, const std::optional<uint32_t>& id, const std::optional<PyScene>& moved) {
     if (!id) {
         if (moved) throw Error("refit: a moved mesh needs the id of the mesh it replaces");
@@ -198,6 +251,11 @@ void bind_render_scene(py::module_& m) {
             },
             py::arg("scene"), py::arg("transform"), py::arg("mask") = 0xFFFFFFFFu,
             "Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.")
+        .def("attach_instances", &attach_instances, py::arg("scenes"), py::arg("transforms"),
+             py::arg("scene_index") = py::none(), py::arg("masks") = 0xFFFFFFFFu,
+             "Places committed RenderScenes by (n, 3, 4) or (n, 4, 4) transforms at once: scenes is one scene or a "
+             "list, scene_index (n integers, default all 0) picks each one's scene, masks is one int or n; returns "
+             "the n consecutive ids. An error names the first bad entry; nothing is attached then.")
         .def(
             "detach", [](PyRenderScene& self, uint32_t id) { self.scene->detach(id); }, py::arg("id"),
             "Removes geometry `id` (its id is not reused); refused while other scenes instance this one.")

@@ -175,3 +175,67 @@ def test_errors_name_the_input():
         leaf2.attach_mesh(spacebvh.mesh(np.eye(3) + 1000.0, np.array([[0, 1, 2]])))
     with pytest.raises(spacebvh.Error, match="cannot trace scenes"):
         spacebvh.RenderScene(kernel="packet8")
+
+
+def test_attach_instances_matches_attaching_one_by_one():
+    triangles, mesh = organic(300)
+    leaf = spacebvh.RenderScene(name="leaf")
+    leaf.attach_mesh(mesh)
+    leaf.commit()
+    square = spacebvh.RenderScene(name="square")
+    square.attach_mesh(spacebvh.mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32), [[0, 1, 2], [0, 2, 3]]))
+    square.commit()
+    rng = np.random.default_rng(3)
+    count = 200
+    transforms = np.stack(
+        [placed(rng.normal(size=3) + [0, 0, 0.1], rng.uniform(0, 360), rng.uniform(0.5, 2, 3), rng.uniform(-3, 3, 3), k % 3 == 0)
+         for k in range(count)]
+    )
+    which = np.arange(count) % 4 == 1
+    masks = np.where(np.arange(count) % 5 == 2, 2, 0xFFFFFFFF)
+    one = spacebvh.RenderScene(name="one")
+    ids_one = [one.attach_instance(square if w else leaf, t, mask=int(m)) for t, w, m in zip(transforms, which, masks)]
+    batch = spacebvh.RenderScene(name="batch")
+    ids = batch.attach_instances([leaf, square], transforms, scene_index=which.astype(np.int64), masks=masks)
+    assert ids.tolist() == ids_one
+    one.commit()
+    batch.commit()
+    lo, hi = (np.array(b) for b in one.bounds)
+    origins = rng.uniform(lo, hi, (4000, 3)).astype(np.float32)
+    directions = rng.normal(size=(4000, 3)).astype(np.float32)
+    for mask in (0xFFFFFFFF, 2):
+        a, b = one.intersect(origins, directions, mask=mask), batch.intersect(origins, directions, mask=mask)
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(one.occluded(origins, directions, mask=mask), batch.occluded(origins, directions, mask=mask))
+    assert (a[4] >= 0).sum() > 100  # the rays reach the instances
+    # 4x4 transforms too; one scene given alone.
+    four = np.concatenate([transforms[:3], np.tile([[[0, 0, 0, 1]]], (3, 1, 1))], axis=1)
+    assert batch.attach_instances(leaf, four).tolist() == [count, count + 1, count + 2]
+
+
+def test_attach_instances_errors_name_the_entry():
+    leaf = spacebvh.RenderScene(name="leaf")
+    leaf.attach_mesh(organic(10)[1])
+    leaf.commit()
+    top = spacebvh.RenderScene(name="top")
+    good = np.tile(np.eye(3, 4, dtype=np.float32), (6, 1, 1))
+    bad = good.copy()
+    bad[4, 1, 1] = 0.0
+    bad[4, 1, :3] = 0.0
+    with pytest.raises(spacebvh.Error, match=r"placements\[4\] \(would be geometry 4\): transform is singular"):
+        top.attach_instances(leaf, bad)
+    four = np.concatenate([good, np.tile([[[0, 0, 0, 1]]], (6, 1, 1))], axis=1).astype(np.float32)
+    four[2, 3, 2] = 1.0
+    with pytest.raises(spacebvh.Error, match=r"transforms\[2\]: transform: the last row"):
+        top.attach_instances(leaf, four)
+    with pytest.raises(spacebvh.Error, match=r"scene_index\[3\]: 1, not in \[0, 1\)"):
+        top.attach_instances([leaf], good, scene_index=[0, 0, 0, 1, 0, 0])
+    with pytest.raises(spacebvh.Error, match=r"masks: transform 5 has -1"):
+        top.attach_instances(leaf, good, masks=np.array([1, 1, 1, 1, 1, -1]))
+    with pytest.raises(spacebvh.Error, match=r"masks: 2 masks for 6 transforms"):
+        top.attach_instances(leaf, good, masks=np.array([1, 1]))
+    with pytest.raises(spacebvh.Error, match=r"\(n, 3, 4\) or \(n, 4, 4\)"):
+        top.attach_instances(leaf, good[0])
+    assert top.geometry_count == 0  # nothing attached by the failed calls
+    assert top.attach_instances(leaf, good).tolist() == list(range(6))

@@ -40,15 +40,14 @@ uint32_t RenderScene::attach_instances(std::span<const std::shared_ptr<const Ren
                 xf[i] = make(placements[i]);
             } catch (const Error&) {
                 size_t seen = first_bad.load();
-                while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
-                }
+                while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {}
                 return;  // the rest of this block comes after i
             }
         }
     });
     if (const size_t i = first_bad; i < n) {
-        const std::string what = batch + ": placements[" + std::to_string(i) + "] (would be geometry " +
-                                 std::to_string(first + i) + ")";
+        const std::string what =
+            batch + ": placements[" + std::to_string(i) + "] (would be geometry " + std::to_string(first + i) + ")";
         if (placements[i].scene >= scenes.size())
             throw Error(what + ": scene index " + std::to_string(placements[i].scene) + ", but " +
                         std::to_string(scenes.size()) + " scene(s) given");

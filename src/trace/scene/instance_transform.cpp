@@ -3,7 +3,10 @@
 // derived in docs/scenes.md, "Boxes of instances").
 #include "trace/scene/instance_transform.hpp"
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -60,6 +63,15 @@ double max_abs(const AABB& box) {
     return m;
 }
 
+// std::nextafter(f, up ? +inf : -inf), inline for finite f (the library call costs more than the
+// rest of a box's rounding): one step of the bits away from or towards zero.
+float next_float(float f, bool up) {
+    if (!std::isfinite(f)) return std::nextafter(f, up ? INFINITY : -INFINITY);
+    if (f == 0.0f) return up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+    const uint32_t bits = std::bit_cast<uint32_t>(f);
+    return std::bit_cast<float>((f > 0.0f) == up ? bits + 1 : bits - 1);
+}
+
 // The exact inverse (in double) of the float inverse: the map from the instance's space back to the
 // parent's that the padding bound is stated for.
 Matrix back_of(const InstanceTransform& xf) {
@@ -87,8 +99,8 @@ void place_box(InstanceTransform& xf, const AABB& child_box, Padding child) {
         }
     }
     for (int i = 0; i < 3; ++i) {
-        xf.box.lo[i] = std::nextafter(float(lo[i]), -INFINITY);
-        xf.box.hi[i] = std::nextafter(float(hi[i]), INFINITY);
+        xf.box.lo[i] = next_float(float(lo[i]), false);
+        xf.box.hi[i] = next_float(float(hi[i]), true);
     }
     // docs/scenes.md: the child's own allowance carried through the map, plus the rounding of the ray
     // transform (u = 2^-23 covers the double sums and the one rounding to float) at any t where the

@@ -27,13 +27,17 @@ constexpr size_t kChunkedPass = size_t(1) << 15;  // nodes this large bin and pa
 constexpr size_t kTaskItems = size_t(1) << 10;    // subtrees this large are built as tasks
 constexpr uint32_t kMaxDepth = 63;                // the walks' stacks hold 64 levels (top_level_wide.hpp)
 
-// An item's box and, in lo's fourth lane, its index (bits); hi's fourth lane is unused.
+// An item's box and, in lo's fourth lane, its index (bits); hi's fourth lane is 0.
 struct alignas(16) Ref {
     __m128 lo, hi;
 };
 
+// Clears the fourth lane: arithmetic on an index's bits (a denormal float for most indices) would
+// take the processor's slow path; min and max on them are harmless.
+__m128 xyz(__m128 v) { return _mm_and_ps(v, _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0))); }
+
 __m128 centroid(const Ref& r) {
-    return _mm_add_ps(_mm_mul_ps(r.lo, _mm_set1_ps(0.5f)), _mm_mul_ps(r.hi, _mm_set1_ps(0.5f)));
+    return _mm_add_ps(_mm_mul_ps(xyz(r.lo), _mm_set1_ps(0.5f)), _mm_mul_ps(r.hi, _mm_set1_ps(0.5f)));
 }
 
 // A box and a centroid box, grown by min and max (exact, so any merge order gives the same result).
@@ -62,7 +66,7 @@ struct Bounds {
 
 float half_area(__m128 lo, __m128 hi) {
     alignas(16) float d[4];
-    _mm_store_ps(d, _mm_max_ps(_mm_sub_ps(hi, lo), _mm_setzero_ps()));
+    _mm_store_ps(d, _mm_max_ps(_mm_sub_ps(xyz(hi), xyz(lo)), _mm_setzero_ps()));
     return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
 }
 
