@@ -34,12 +34,9 @@ SceneMemoryEstimate estimate_scene_memory(std::span<const uint64_t> mesh_triangl
         estimate.mesh_bytes += triangles * sizeof(Triangle) + build.references * kKeptPerReference;
         estimate.build_bytes = std::max(estimate.build_bytes, build.bytes);
     }
-    // The top levels are built by the binned builder over one flat triangle per geometry, with a leaf
-    // per geometry; their scratch is at most that of one build over all the instances.
-    BuildConfig top = BuildConfig::for_preset(Preset::binned);
-    top.limits.max_leaf_size = 1;
-    estimate.build_bytes = std::max(
-        estimate.build_bytes, estimate_build_memory(instance_count, top).bytes + instance_count * sizeof(Triangle));
+    // The top levels' builds (top_level_build.cpp): their scratch is at most that of one build over all
+    // the instances.
+    estimate.build_bytes = std::max(estimate.build_bytes, instance_count * scene::kTopLevelBuildBytesPerItem);
     estimate.instance_bytes = instance_count * kKeptPerInstance + top_levels * kKeptPerScene;
     return estimate;
 }

@@ -30,6 +30,9 @@ struct TopLevel {
 // The binned SAH tree over the items' boxes, one item per leaf and at most 64 levels, the same for any
 // thread count (top_level_build.cpp); or refitted to their current boxes.
 TopLevel build_top_level(std::span<const TopLevelItem> items);
+// Its scratch per item: the items' boxes twice (32 bytes each: in place and the partition's copy) and
+// a byte of the chunked partition's sides.
+inline constexpr uint64_t kTopLevelBuildBytesPerItem = 2 * 32 + 1;
 // Those flat triangles, one per item (a scene file's top level is stored as a tree over them).
 std::vector<Triangle> top_level_triangles(std::span<const TopLevelItem> items);
 void refit_top_level(TopLevel& top, std::span<const TopLevelItem> items);

@@ -31,6 +31,7 @@ constexpr uint32_t kMaxDepth = 63;                // the walks' stacks hold 64 l
 struct alignas(16) Ref {
     __m128 lo, hi;
 };
+static_assert(2 * sizeof(Ref) + 1 == kTopLevelBuildBytesPerItem);
 
 // Clears the fourth lane: arithmetic on an index's bits (a denormal float for most indices) would
 // take the processor's slow path; min and max on them are harmless.
