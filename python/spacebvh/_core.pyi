@@ -553,6 +553,12 @@ class RenderScene:
         """
         Places a committed RenderScene by a (3, 4) or (4, 4) transform (parent = A local + b); returns its id.
         """
+    def attach_instances(
+        self, scenes: typing.Any, transforms: typing.Any, scene_index: typing.Any = None, masks: typing.Any = 4294967295
+    ) -> numpy.typing.NDArray[numpy.int64]:
+        """
+        Places committed RenderScenes by (n, 3, 4) or (n, 4, 4) transforms at once: scenes is one scene or a list, scene_index (n integers, default all 0) picks each one's scene, masks is one int or n; returns the n consecutive ids. An error names the first bad entry; nothing is attached then.
+        """
     def attach_mesh(self, mesh: Scene, mask: typing.Any = 4294967295) -> int:
         """
         Adds a spacebvh.Scene (float32 coordinates) as a mesh; returns its geometry id.

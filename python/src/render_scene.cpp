@@ -199,7 +199,7 @@ py::array_t<int64_t> attach_instances(PyRenderScene& self, const py::handle& sce
         first = self.scene->attach_instances(scenes, placements);
     }
     self.by_id.resize(first + n, nullptr);
-    py::array_t<int64_t> ids(py::ssize_t(n));
+    py::array_t<int64_t> ids(static_cast<py::ssize_t>(n));
     for (size_t k = 0; k < n; ++k) ids.mutable_data()[k] = int64_t(first + k);
     return ids;
 }

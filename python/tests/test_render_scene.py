@@ -183,13 +183,23 @@ def test_attach_instances_matches_attaching_one_by_one():
     leaf.attach_mesh(mesh)
     leaf.commit()
     square = spacebvh.RenderScene(name="square")
-    square.attach_mesh(spacebvh.mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32), [[0, 1, 2], [0, 2, 3]]))
+    square.attach_mesh(
+        spacebvh.mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32), [[0, 1, 2], [0, 2, 3]])
+    )
     square.commit()
     rng = np.random.default_rng(3)
     count = 200
     transforms = np.stack(
-        [placed(rng.normal(size=3) + [0, 0, 0.1], rng.uniform(0, 360), rng.uniform(0.5, 2, 3), rng.uniform(-3, 3, 3), k % 3 == 0)
-         for k in range(count)]
+        [
+            placed(
+                rng.normal(size=3) + [0, 0, 0.1],
+                rng.uniform(0, 360),
+                rng.uniform(0.5, 2, 3),
+                rng.uniform(-3, 3, 3),
+                k % 3 == 0,
+            )
+            for k in range(count)
+        ]
     )
     which = np.arange(count) % 4 == 1
     masks = np.where(np.arange(count) % 5 == 2, 2, 0xFFFFFFFF)
@@ -207,7 +217,9 @@ def test_attach_instances_matches_attaching_one_by_one():
         a, b = one.intersect(origins, directions, mask=mask), batch.intersect(origins, directions, mask=mask)
         for x, y in zip(a, b):
             np.testing.assert_array_equal(x, y)
-        np.testing.assert_array_equal(one.occluded(origins, directions, mask=mask), batch.occluded(origins, directions, mask=mask))
+        np.testing.assert_array_equal(
+            one.occluded(origins, directions, mask=mask), batch.occluded(origins, directions, mask=mask)
+        )
     assert (a[4] >= 0).sum() > 100  # the rays reach the instances
     # 4x4 transforms too; one scene given alone.
     four = np.concatenate([transforms[:3], np.tile([[[0, 0, 0, 1]]], (3, 1, 1))], axis=1)
