@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <memory>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -281,7 +282,9 @@ struct Builder {
 TopLevel build_top_level(std::span<const TopLevelItem> items) {
     const size_t n = items.size();
     if (n == 0 || n >= kInvalidIndex / 2) throw Error("top level: " + std::to_string(n) + " items (1 .. 2^31 - 1)");
-    std::vector<Ref> refs(n), scratch(n);
+    // Left uninitialised (a Ref has no initialisers): each page is first written by the pass that
+    // fills it, in parallel, not zeroed beforehand by this thread.
+    const std::unique_ptr<Ref[]> refs(new Ref[n]), scratch(new Ref[n]);
     const Bounds all = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, n, kChunk), Bounds(),
         [&](const tbb::blocked_range<size_t>& r, Bounds b) {
@@ -302,7 +305,7 @@ TopLevel build_top_level(std::span<const TopLevelItem> items) {
     top.bvh.primitives.resize(n);
     top.bvh.builder = "binned";
     top.bvh.cost = BuildConfig::for_preset(Preset::binned).cost;
-    Builder{refs.data(), scratch.data(), top.bvh}.build({0, n, 0, 1, 0, all});
+    Builder{refs.get(), scratch.get(), top.bvh}.build({0, n, 0, 1, 0, all});
     measure_top_level(top, items);
     return top;
 }
