@@ -14,9 +14,14 @@ struct TracerInternals {
     // The tracer's single-ray kernel entry (kernels.hpp, KernelEntry).
     static trace::KernelEntry entry(const Tracer& tracer);
     // Tracer::refit without its checks: `triangles` (the ones `mesh` shows) are finite and `bvh` names
-    // none past them, which the caller has made sure of.
-    static bool refit_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles,
-                              const Bvh& bvh);
+    // none past them, which the caller has made sure of. `same_degenerate`: exactly the triangles that
+    // were degenerate when the layout was last made or refitted are degenerate now (the caller compared
+    // them), so the layout's check of that is skipped (refit_wide).
+    static bool refit_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles, const Bvh& bvh,
+                              bool same_degenerate = false);
+    // refit_boxes(bvh, triangles) and then refit_checked(..., same_degenerate = true), in one walk of the
+    // tree where the layout allows (trace::refit_tree_and_wide). The same conditions on `triangles`.
+    static void refit_tree_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles, Bvh& bvh);
 };
 
 }  // namespace spacebvh

@@ -282,11 +282,23 @@ void RenderScene::refit(uint32_t id) {
     // The copy and every pass below run across the calling thread's oneTBB arena; each writes disjoint
     // parts, so the result is the same for any thread count. The tracer's refit skips the checks
     // TriangleStore and refit_boxes made.
+    // The copy also compares each triangle's degeneracy before and after (both are in cache there): when
+    // none changed, the layout keeps exactly its triangles and need not check that itself.
+    std::atomic<bool> degeneracy_changed = false;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, moved.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
-        std::copy(moved.begin() + r.begin(), moved.begin() + r.end(), mesh->triangles.begin() + r.begin());
+        bool changed = false;
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            changed |= mesh->triangles[t].is_degenerate() != moved[t].is_degenerate();
+            mesh->triangles[t] = moved[t];
+        }
+        if (changed) degeneracy_changed.store(true, std::memory_order_relaxed);
     });
-    refit_boxes(mesh->bvh, mesh->triangles);
-    TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+    if (degeneracy_changed) {
+        refit_boxes(mesh->bvh, mesh->triangles);
+        TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+    } else {
+        TracerInternals::refit_tree_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+    }
     mesh->extent = scene::extent_of(mesh->bvh.root().bounds);
     if (impl_->committed) refit();
 }
