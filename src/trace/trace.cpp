@@ -177,11 +177,21 @@ void TracerInternals::refit_tree_checked(Tracer& tracer, const MeshView& mesh, s
                                          Bvh& bvh) {
     Tracer::Impl& impl = *tracer.impl_;
     if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
-        if (trace::refit_tree_and_wide(*wide4, triangles, bvh)) return;
+        if (trace::refit_tree_and_wide(*wide4, triangles, bvh) == trace::TreeRefit::done) return;
     if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
-        if (trace::refit_tree_and_wide(*wide8, triangles, bvh)) return;
+        if (trace::refit_tree_and_wide(*wide8, triangles, bvh) == trace::TreeRefit::done) return;
     refit_boxes(bvh, triangles);
     refit_checked(tracer, mesh, triangles, bvh, true);
+}
+
+trace::TreeRefit TracerInternals::refit_tree_unchecked(Tracer& tracer, std::span<const Triangle> moved,
+                                                       std::span<const Triangle> current, Bvh& bvh) {
+    Tracer::Impl& impl = *tracer.impl_;
+    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
+        return trace::refit_tree_and_wide(*wide4, moved, bvh, current);
+    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
+        return trace::refit_tree_and_wide(*wide8, moved, bvh, current);
+    return trace::TreeRefit::unsupported;
 }
 
 trace::KernelEntry TracerInternals::entry(const Tracer& tracer) {

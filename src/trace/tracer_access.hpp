@@ -7,6 +7,7 @@
 
 #include "spacebvh/trace.hpp"
 #include "trace/kernels/kernels.hpp"
+#include "trace/layout/wide_layout.hpp"
 
 namespace spacebvh {
 
@@ -22,6 +23,11 @@ struct TracerInternals {
     // refit_boxes(bvh, triangles) and then refit_checked(..., same_degenerate = true), in one walk of the
     // tree where the layout allows (trace::refit_tree_and_wide). The same conditions on `triangles`.
     static void refit_tree_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles, Bvh& bvh);
+    // The same over `moved` (a soup the tree indexes) before it is checked: in one walk that checks every
+    // coordinate it reads (trace::refit_tree_and_wide with restore = `current`, the triangles the tree
+    // and layout hold now). unsupported and not_finite change nothing.
+    static trace::TreeRefit refit_tree_unchecked(Tracer& tracer, std::span<const Triangle> moved,
+                                                 std::span<const Triangle> current, Bvh& bvh);
 };
 
 }  // namespace spacebvh

@@ -3,6 +3,7 @@
 // again from the refitted binary tree and the moved triangles.
 #include <algorithm>
 #include <atomic>
+#include <bit>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -60,14 +61,29 @@ void put_lane(TrianglePack& pack, int lane, const Triangle& t) {
         for (int axis = 0; axis < 3; ++axis) pack.vertex[k][axis][lane] = (*vertices[k])[axis];
 }
 
+// Whether every coordinate is finite (its exponent bits not all set).
+bool is_finite(const Triangle& t) {
+    uint32_t bad = 0;
+    for (const Vec3* p : {&t.v0, &t.v1, &t.v2})
+        for (int axis = 0; axis < 3; ++axis)
+            bad |= (std::bit_cast<uint32_t>((*p)[axis]) & 0x7F800000u) == 0x7F800000u;
+    return !bad;
+}
+
 // Which reference of the tree rewrites each used pack lane (WideLayout::lanes): the lanes of a triangle
 // go to distinct references of it, in order. Empty when a lane's triangle has no reference left (a
-// layout the tree did not make): then refit rewrites the packs in a pass of their own.
-std::vector<uint32_t> make_lane_map(const TrianglePacks& packs, const Bvh& bvh, size_t triangle_count) {
+// layout the tree did not make): then refit rewrites the packs in a pass of their own. `cover_all`:
+// whether every triangle has a reference.
+std::vector<uint32_t> make_lane_map(const TrianglePacks& packs, const Bvh& bvh, size_t triangle_count,
+                                    bool& cover_all) {
     // The references of each triangle, grouped by triangle (counting sort): refs[start[q] .. start[q + 1]).
     std::vector<uint32_t> start(triangle_count + 1, 0), refs(bvh.primitives.size());
     for (const uint32_t q : bvh.primitives) ++start[q + 1];
-    for (size_t q = 0; q < triangle_count; ++q) start[q + 1] += start[q];
+    cover_all = true;
+    for (size_t q = 0; q < triangle_count; ++q) {
+        cover_all &= start[q + 1] > 0;
+        start[q + 1] += start[q];
+    }
     std::vector<uint32_t> next(start.begin(), start.end() - 1);
     for (uint32_t k = 0; k < bvh.primitives.size(); ++k) refs[next[bvh.primitives[k]]++] = k;
     std::vector<uint32_t> lanes(bvh.primitives.size(), kInvalidIndex);
@@ -126,29 +142,42 @@ bool refit_wide(WideLayout<W>& layout, std::span<const Triangle> triangles, cons
 }
 
 template <int W>
-bool refit_tree_and_wide(WideLayout<W>& layout, std::span<const Triangle> triangles, Bvh& bvh) {
-    if (layout.source.size() != layout.nodes.size() * W) return false;
+TreeRefit refit_tree_and_wide(WideLayout<W>& layout, std::span<const Triangle> triangles, Bvh& bvh,
+                              std::span<const Triangle> restore) {
+    if (layout.source.size() != layout.nodes.size() * W) return TreeRefit::unsupported;
     if (!layout.lanes_tried) {
-        layout.lanes = make_lane_map(layout.packs, bvh, triangles.size());
+        layout.lanes = make_lane_map(layout.packs, bvh, triangles.size(), layout.lanes_cover_all);
         layout.lanes_tried = true;
     }
+    const bool check = !restore.empty();
+    if (check && (layout.lanes.empty() || !layout.lanes_cover_all)) return TreeRefit::unsupported;
     if (layout.lanes.empty()) {  // no owner for some lane: the tree, then the packs on their own
         builders::refit_walk(bvh, triangles, [](uint32_t, const Triangle&) {});
-        return refit_wide(layout, triangles, bvh, true);
+        refit_wide(layout, triangles, bvh, true);
+        return TreeRefit::done;
     }
     // Each lane has one owning reference and each reference is walked by one task, so the writes are
     // disjoint and the packs, like the boxes, are the same for any thread count.
-    builders::refit_walk(bvh, triangles, [&](uint32_t reference, const Triangle& t) {
-        const uint32_t slot = layout.lanes[reference];
-        if (slot != kInvalidIndex) put_lane(layout.packs[slot / 4], int(slot % 4), t);
-    });
+    std::atomic<bool> finite = true;
+    const auto walk = [&](std::span<const Triangle> from, bool check_finite) {
+        builders::refit_walk(bvh, from, [&](uint32_t reference, const Triangle& t) {
+            if (check_finite && !is_finite(t)) finite.store(false, std::memory_order_relaxed);
+            const uint32_t slot = layout.lanes[reference];
+            if (slot != kInvalidIndex) put_lane(layout.packs[slot / 4], int(slot % 4), t);
+        });
+    };
+    walk(triangles, check);
+    if (!finite) {  // every triangle is referenced, so the walk saw the bad one: put the old ones back
+        walk(restore, false);
+        return TreeRefit::not_finite;
+    }
     refit_nodes(layout, bvh);
-    return true;
+    return TreeRefit::done;
 }
 
 template bool refit_wide<4>(WideLayout<4>&, std::span<const Triangle>, const Bvh&, bool);
 template bool refit_wide<8>(WideLayout<8>&, std::span<const Triangle>, const Bvh&, bool);
-template bool refit_tree_and_wide<4>(WideLayout<4>&, std::span<const Triangle>, Bvh&);
-template bool refit_tree_and_wide<8>(WideLayout<8>&, std::span<const Triangle>, Bvh&);
+template TreeRefit refit_tree_and_wide<4>(WideLayout<4>&, std::span<const Triangle>, Bvh&, std::span<const Triangle>);
+template TreeRefit refit_tree_and_wide<8>(WideLayout<8>&, std::span<const Triangle>, Bvh&, std::span<const Triangle>);
 
 }  // namespace spacebvh::trace
