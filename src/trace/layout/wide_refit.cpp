@@ -65,8 +65,7 @@ void put_lane(TrianglePack& pack, int lane, const Triangle& t) {
 bool is_finite(const Triangle& t) {
     uint32_t bad = 0;
     for (const Vec3* p : {&t.v0, &t.v1, &t.v2})
-        for (int axis = 0; axis < 3; ++axis)
-            bad |= (std::bit_cast<uint32_t>((*p)[axis]) & 0x7F800000u) == 0x7F800000u;
+        for (int axis = 0; axis < 3; ++axis) bad |= (std::bit_cast<uint32_t>((*p)[axis]) & 0x7F800000u) == 0x7F800000u;
     return !bad;
 }
 
