@@ -150,7 +150,7 @@ TEST(SoupRefit, TrianglesBecomingOrStoppingBeingDegenerate) {
         Level level(config, "soup");
         level.mesh(mesh);
         level.scene->commit();
-        mesh[7] = whole;           // now it can be hit
+        mesh[7] = whole;          // now it can be hit
         mesh[9].v1 = mesh[9].v0;  // and this one cannot
         level.scene->refit(0);
         const Tally tally = check(level, config, 300);
