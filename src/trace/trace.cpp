@@ -8,6 +8,7 @@
 #include <string>
 #include <variant>
 
+#include "spacebvh/build.hpp"
 #include "spacebvh/error.hpp"
 #include "trace/layout/binary_layout.hpp"
 #include "trace/kernels/kernels.hpp"
@@ -160,16 +161,37 @@ bool Tracer::refit(const MeshView& mesh, const Bvh& bvh) {
 }
 
 bool TracerInternals::refit_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles,
-                                    const Bvh& bvh) {
+                                    const Bvh& bvh, bool same_degenerate) {
     Tracer::Impl& impl = *tracer.impl_;
     if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
-        if (trace::refit_wide(*wide4, triangles, bvh)) return true;
+        if (trace::refit_wide(*wide4, triangles, bvh, same_degenerate)) return true;
     if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
-        if (trace::refit_wide(*wide8, triangles, bvh)) return true;
+        if (trace::refit_wide(*wide8, triangles, bvh, same_degenerate)) return true;
     // Into the same Impl, so the layout keeps its address (TracerInternals::entry stays valid).
     Tracer fresh(mesh, bvh, impl.config);
     impl = std::move(*fresh.impl_);
     return false;
+}
+
+void TracerInternals::refit_tree_checked(Tracer& tracer, const MeshView& mesh, std::span<const Triangle> triangles,
+                                         Bvh& bvh) {
+    Tracer::Impl& impl = *tracer.impl_;
+    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
+        if (trace::refit_tree_and_wide(*wide4, triangles, bvh) == trace::TreeRefit::done) return;
+    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
+        if (trace::refit_tree_and_wide(*wide8, triangles, bvh) == trace::TreeRefit::done) return;
+    refit_boxes(bvh, triangles);
+    refit_checked(tracer, mesh, triangles, bvh, true);
+}
+
+trace::TreeRefit TracerInternals::refit_tree_unchecked(Tracer& tracer, std::span<const Triangle> moved,
+                                                       std::span<const Triangle> current, Bvh& bvh) {
+    Tracer::Impl& impl = *tracer.impl_;
+    if (auto* wide4 = std::get_if<trace::WideLayout<4>>(&impl.layout))
+        return trace::refit_tree_and_wide(*wide4, moved, bvh, current);
+    if (auto* wide8 = std::get_if<trace::WideLayout<8>>(&impl.layout))
+        return trace::refit_tree_and_wide(*wide8, moved, bvh, current);
+    return trace::TreeRefit::unsupported;
 }
 
 trace::KernelEntry TracerInternals::entry(const Tracer& tracer) {
@@ -272,7 +294,7 @@ size_t Tracer::memory_bytes() const {
                                layout.packs.size() * sizeof(trace::TrianglePack) +
                                layout.planes.size() * sizeof(trace::PackPlanes);
                 if constexpr (!std::is_same_v<Layout, trace::QuantizedLayout8>)
-                    bytes += layout.source.size() * sizeof(uint32_t);  // the refit map, when kept
+                    bytes += (layout.source.size() + layout.lanes.size()) * sizeof(uint32_t);  // the refit maps
                 return bytes;
             }
         },

@@ -100,6 +100,21 @@ bool all_finite(std::span<const Triangle> triangles) {
     return finite;
 }
 
+// Copies `moved` into `into` (same size) in parallel, and says whether any triangle became or stopped
+// being degenerate (both are in cache there).
+bool copy_comparing_degeneracy(std::span<const Triangle> moved, std::vector<Triangle>& into) {
+    std::atomic<bool> changed = false;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, moved.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+        bool any = false;
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            any |= into[t].is_degenerate() != moved[t].is_degenerate();
+            into[t] = moved[t];
+        }
+        if (any) changed.store(true, std::memory_order_relaxed);
+    });
+    return changed;
+}
+
 uint32_t next_id(const std::vector<Geometry>& geometries, const std::string& name) {
     if (geometries.size() >= kInvalidIndex) throw Error("scene '" + name + "': out of geometry ids");
     return uint32_t(geometries.size());
@@ -305,10 +320,33 @@ void RenderScene::refit(uint32_t id) {
     Geometry& g = impl_->geometry(id);
     MeshRecord* mesh = g.mesh();
     if (!mesh) throw Error(impl_->what(id) + " is an instance: refit() the scene it places, then refit() this one");
+    // In place: the tree keeps its shape (split references get their triangles' whole boxes), and the
+    // kernel's layout keeps its nodes and packing where it can (Tracer::refit). Every pass runs across
+    // the calling thread's oneTBB arena and writes disjoint parts, so the result is the same for any
+    // thread count. Nothing changes before the moved triangles are known to be finite.
+    const auto refitted = [&] {
+        mesh->extent = scene::extent_of(mesh->bvh.root().bounds);
+        if (impl_->committed) refit();
+    };
+    std::span<const Triangle> moved = mesh->view.soup();
+    if (mesh->view.is_soup() && moved.size() == mesh->triangles.size()) {
+        // A soup: the tree, its layout and the finite check in one walk over the caller's buffer where
+        // the layout allows (it reads each triangle once); then the copy the scene keeps.
+        const trace::TreeRefit walked =
+            TracerInternals::refit_tree_unchecked(*mesh->tracer, moved, mesh->triangles, mesh->bvh);
+        if (walked == trace::TreeRefit::not_finite) {
+            const TriangleStore named(mesh->view);  // throws, naming the first bad triangle
+            throw Error(mesh->view.name() + ": refit needs finite coordinates");
+        }
+        if (walked == trace::TreeRefit::done) {
+            if (copy_comparing_degeneracy(moved, mesh->triangles))  // the layout stores other triangles now
+                TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+            return refitted();
+        }
+    }
     // Checked (finite coordinates) before anything changes: a soup in place, in parallel (TriangleStore
     // then names the first bad triangle); an indexed mesh expanded by TriangleStore.
     std::optional<TriangleStore> expanded;
-    std::span<const Triangle> moved = mesh->view.soup();
     if (!mesh->view.is_soup() || !all_finite(moved)) {
         expanded.emplace(mesh->view);
         moved = expanded->triangles();
@@ -316,18 +354,15 @@ void RenderScene::refit(uint32_t id) {
     if (moved.size() != mesh->triangles.size())
         throw Error(mesh->view.name() + ": refit needs the same triangles, got " + std::to_string(moved.size()) +
                     " instead of " + std::to_string(mesh->triangles.size()));
-    // In place: the tree keeps its shape (split references get their triangles' whole boxes), and the
-    // kernel's layout keeps its nodes and packing where it can (Tracer::refit).
-    // The copy and every pass below run across the calling thread's oneTBB arena; each writes disjoint
-    // parts, so the result is the same for any thread count. The tracer's refit skips the checks
-    // TriangleStore and refit_boxes made.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, moved.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
-        std::copy(moved.begin() + r.begin(), moved.begin() + r.end(), mesh->triangles.begin() + r.begin());
-    });
-    refit_boxes(mesh->bvh, mesh->triangles);
-    TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
-    mesh->extent = scene::extent_of(mesh->bvh.root().bounds);
-    if (impl_->committed) refit();
+    // When no triangle's degeneracy changed, the layout keeps exactly its triangles and need not check
+    // that itself. The tracer's refit skips the checks TriangleStore and refit_boxes made.
+    if (copy_comparing_degeneracy(moved, mesh->triangles)) {
+        refit_boxes(mesh->bvh, mesh->triangles);
+        TracerInternals::refit_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+    } else {
+        TracerInternals::refit_tree_checked(*mesh->tracer, MeshView(mesh->triangles), mesh->triangles, mesh->bvh);
+    }
+    refitted();
 }
 
 void RenderScene::refit() {
