@@ -40,7 +40,7 @@ INVALID_ID = 0xFFFFFFFF
 # The scene's tree: binned SAH, then a few batches of reinsertion (docs/queries.md, "The Open3D
 # drop-in"). Reinsertion repairs the top levels that binning places badly on meshes of uneven
 # density (rooms, architecture), where it cuts the boxes an incoherent ray tests by about a quarter,
-# at about 1.3x the binned build; the first batches take nearly all of its gain.
+# at 1.35x to 2x the binned build time; the first batches take nearly all of its gain.
 _BUILDER = "binned"
 _OPTIMIZE = 4
 _UNSET = object()
