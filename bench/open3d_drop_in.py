@@ -2,7 +2,9 @@
 """Open3D's RaycastingScene against spacebvh.open3d.RaycastingScene: every query, and wrong answers.
 
 Not a test. Part 1 times every query of the class on the bunny and crytek_sponza of the shared scenes
-($SPACEBVH_SCENES, default ../shared/scenes beside the checkout), 1,000,000 rays or points (origins and
+($SPACEBVH_SCENES, default ../shared/scenes beside the checkout) and on a generated mesh of 1,555,200
+triangles (`organic-x16`: the built-in organic mesh split twice into four, the same on every run;
+bench/shared_scenes.py), 1,000,000 rays or points (origins and
 points uniform in the scene's box, directions uniform on the sphere), `nthreads` threads for both
 (Open3D votes at its default nsamples=1), run in turn with medians, and prints the ratios (Open3D's
 time over ours: above 1 is spacebvh faster). Part 2 counts each library's wrong answers on hostile sets
@@ -24,7 +26,10 @@ whose exact answers are known by construction:
 
 Each query's line also gives the time of the general spacebvh call the drop-in rests on ("core":
 Tracer.intersect / occluded, RayQueries.count / all / contains, DistanceQueries on the same tree and
-inputs), so that the drop-in's own cost (drop-in / core) and the gap of the core to Open3D show apart.
+inputs), so that the drop-in's own cost (drop-in / core) and the gap of the core to Open3D show apart;
+each scene's first line gives both libraries' build times (Open3D's add_triangles and commit at its
+first query; ours at the first query of each kind: the tree, then the tracer's and the crossing
+walk's layouts), which the query timings leave out.
 --queries times only the queries named (all by default). --scenes takes any scene of the shared
 collection by name (NAME/NAME.obj), e.g. `--scenes bunny crytek_sponza living_room_3` for a large one
 (786,208 triangles).
@@ -38,7 +43,7 @@ import time
 import hostile_sets as sets
 import numpy as np
 import open3d as o3d
-from shared_scenes import each_scene
+from shared_scenes import LARGE, each_scene
 
 import spacebvh
 from spacebvh.open3d import RaycastingScene
@@ -132,12 +137,16 @@ def speed(args):
         points = rng.uniform(lo, hi, (args.count, 3)).astype(np.float32)
         their_rays, their_points = o3d.core.Tensor(rays), o3d.core.Tensor(points)
         # Builds (at the first query of each kind: contacts, crossings, distances) apart from the timings.
+        built = []
         for scene, r, p in ((ours, rays, points), (theirs, their_rays, their_points)):
+            start = time.perf_counter()
             for _label, call, _core in queries():
                 call(scene, r[:1], p[:1], args.threads)
+            built.append(time.perf_counter() - start)
         print(
             f"\n{name}: {len(faces)} triangles, {args.count} rays/points, {args.threads} threads, "
-            f"medians of {args.repeat}"
+            f"medians of {args.repeat}; builds (first query of each kind): open3d {built[1]:.3f} s, "
+            f"spacebvh {built[0]:.3f} s"
         )
         for label, call, core in queries():
             if args.queries and label not in args.queries:
@@ -249,7 +258,7 @@ def main():
     parser.add_argument("--count", type=int, default=1_000_000, help="rays and points per query")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each query pair; medians are printed")
-    parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza"])
+    parser.add_argument("--scenes", nargs="+", default=["bunny", "crytek_sponza", LARGE])
     parser.add_argument("--queries", nargs="+", choices=[q[0] for q in queries()], help="time only these (default all)")
     parser.add_argument("--grid", type=int, default=8, help="squares per box edge in the hostile sets")
     parser.add_argument("--surface-grid", type=int, default=3, help="quads per box edge for the rays from the surface")

@@ -37,6 +37,12 @@ from . import _core
 __all__ = ["RaycastingScene", "INVALID_ID"]
 
 INVALID_ID = 0xFFFFFFFF
+# The scene's tree: binned SAH, then a few batches of reinsertion (docs/queries.md, "The Open3D
+# drop-in"). Reinsertion repairs the top levels that binning places badly on meshes of uneven
+# density (rooms, architecture), where it cuts the boxes an incoherent ray tests by about a quarter,
+# at 1.35x to 2x the binned build time; the first batches take nearly all of its gain.
+_BUILDER = "binned"
+_OPTIMIZE = 4
 _UNSET = object()
 _open3d: Any = _UNSET
 
@@ -148,7 +154,9 @@ class RaycastingScene:
             vertices = np.concatenate([v.astype(dtype) for v, _ in self._geometries])
             starts = np.cumsum([0] + [len(v) for v, _ in self._geometries])[:-1]
             faces = np.concatenate([f + s for (_, f), s in zip(self._geometries, starts)])
-            cache["bvh"] = _core.build(_core.mesh(vertices, faces), threads=self._build_threads)
+            cache["bvh"] = _core.build(
+                _core.mesh(vertices, faces), _BUILDER, threads=self._build_threads, optimize=_OPTIMIZE
+            )
             corners = vertices.astype(np.float64)[faces]
             normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
             length = np.linalg.norm(normals, axis=1, keepdims=True)

@@ -170,6 +170,9 @@ const std::string& build_doc();
 // `threads` threads without the GIL.
 py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int threads);
 py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers, int threads);
+// Any-hit answers of the source's rays, traced block by block (in_ray_blocks) across `threads` threads
+// without the GIL, each block's answers written straight into the bool array.
+py::array_t<bool> occluded_in_blocks(const Tracer& tracer, const RaySource& source, int threads);
 
 // queries.cpp: whether each point (k, 3) of the argument `what` is inside by RayQueries::contains,
 // across `threads` threads without the GIL; a point that is not finite raises Error naming its row.

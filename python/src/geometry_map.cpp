@@ -5,6 +5,7 @@
 // them read in place, every output array written by one pass across the threads without the GIL.
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -46,6 +47,11 @@ struct GeometryMap {
             for (int axis = 0; axis < 3; ++axis) normal_out[axis] = entry.normal[axis];
     }
 
+    // Starts fetching the entry of combined triangle `triangle` (kInvalidIndex: nothing to fetch).
+    void prefetch(uint32_t triangle) const {
+        if (triangle != kInvalidIndex) __builtin_prefetch(&entries[triangle]);
+    }
+
     void check_size(size_t scene_triangles, const char* what) const {
         if (scene_triangles != triangles())
             throw Error(std::string(what) + " is over " + std::to_string(scene_triangles) +
@@ -83,9 +89,8 @@ GeometryMap make_map(const std::vector<int64_t>& counts, const py::handle& norma
     return map;
 }
 
-// Rays from rows (k, 6): origin then direction, float32 or float64, any strides.
-std::vector<Ray> rays_from_rows(const Frame& frame, const py::handle& rows_arg, double tnear, double tfar,
-                                int threads) {
+// Rays from rows (k, 6): origin then direction, float32 or float64, any strides; read in place.
+RaySource rays_from_rows(const Frame& frame, const py::handle& rows_arg, double tnear, double tfar) {
     const py::array rows = py::module_::import("numpy").attr("asarray")(rows_arg).cast<py::array>();
     const char kind = rows.dtype().kind();
     if (kind != 'f' && kind != 'i' && kind != 'u')
@@ -97,23 +102,29 @@ std::vector<Ray> rays_from_rows(const Frame& frame, const py::handle& rows_arg, 
     const py::slice all{py::none(), py::none(), py::none()};
     const py::object origins = rows[py::make_tuple(all, py::slice(0, 3, 1))];
     const py::object directions = rows[py::make_tuple(all, py::slice(3, 6, 1))];
-    return rays_from_arguments(frame, origins, directions, py::float_(tnear), py::float_(tfar), threads);
+    return ray_source(frame, origins, directions, py::float_(tnear), py::float_(tfar));
 }
 
+// The contact queries trace the rays block by block (in_ray_blocks) and write Open3D's arrays from
+// each block's answers: no array of every ray or every hit is made, filled and read again.
 py::dict cast_rays(const GeometryMap& map, const PyTracer& tracer, const py::handle& rows, int threads) {
     map.check_size(tracer.scene.scene->triangles.size(), "the tracer");
-    const std::vector<Ray> rays = rays_from_rows(tracer.scene.frame, rows, 0.0, double(kInfinity), threads);
-    const py::ssize_t n = py::ssize_t(rays.size());
+    const RaySource source = rays_from_rows(tracer.scene.frame, rows, 0.0, double(kInfinity));
+    const py::ssize_t n = py::ssize_t(source.size());
     py::array_t<float> t(n), uvs(std::vector<py::ssize_t>{n, 2}), normals(std::vector<py::ssize_t>{n, 3});
     py::array_t<uint32_t> geometry(n), primitive(n);
     float *t_out = t.mutable_data(), *uv_out = uvs.mutable_data(), *normal_out = normals.mutable_data();
     uint32_t *geometry_out = geometry.mutable_data(), *primitive_out = primitive.mutable_data();
     without_gil(threads, [&] {
-        std::vector<Hit> hits(rays.size());
-        tracer.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits));
-        in_blocks(hits.size(), 1 << 13, [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) {
-                const Hit& hit = hits[i];
+        in_ray_blocks(source, [&](size_t first, std::span<const Ray> rays) {
+            std::array<Hit, kRayBlock> hits;
+            tracer.tracer->intersect(rays, std::span<Hit>(hits.data(), rays.size()));
+            // The entries of a large mesh (20 bytes a triangle) miss the cache at every hit: their
+            // fetches are started together, before the writes that wait on them.
+            for (size_t k = 0; k < rays.size(); ++k) map.prefetch(hits[k].primitive);
+            for (size_t k = 0; k < rays.size(); ++k) {
+                const Hit& hit = hits[k];
+                const size_t i = first + k;
                 const bool is_hit = hit.is_hit();
                 t_out[i] = is_hit ? hit.t : std::numeric_limits<float>::infinity();
                 uv_out[2 * i] = is_hit ? hit.u : 0.0f;
@@ -129,20 +140,21 @@ py::dict cast_rays(const GeometryMap& map, const PyTracer& tracer, const py::han
 py::array_t<bool> test_occlusions(const GeometryMap& map, const PyTracer& tracer, const py::handle& rows, double tnear,
                                   double tfar, int threads) {
     map.check_size(tracer.scene.scene->triangles.size(), "the tracer");
-    const std::vector<Ray> rays = rays_from_rows(tracer.scene.frame, rows, tnear, tfar, threads);
-    std::vector<uint8_t> answers(rays.size());
-    without_gil(threads, [&] { tracer.tracer->occluded(std::span<const Ray>(rays), std::span<uint8_t>(answers)); });
-    return answers_as_array(answers, threads);
+    return occluded_in_blocks(*tracer.tracer, rays_from_rows(tracer.scene.frame, rows, tnear, tfar), threads);
 }
 
 py::array_t<int32_t> count_intersections(const GeometryMap& map, const PyQueries& queries, const py::handle& rows,
                                          int threads) {
     map.check_size(queries.queries->triangle_count(), "the ray queries");
-    const std::vector<Ray> rays = rays_from_rows(queries.scene.frame, rows, 0.0, double(kInfinity), threads);
-    py::array_t<int32_t> counts(py::ssize_t(rays.size()));
+    const RaySource source = rays_from_rows(queries.scene.frame, rows, 0.0, double(kInfinity));
+    py::array_t<int32_t> counts(py::ssize_t(source.size()));
     // uint32 and int32 may alias; a count never reaches 2^31 (it is at most the triangle count).
-    std::span<uint32_t> out(reinterpret_cast<uint32_t*>(counts.mutable_data()), rays.size());
-    without_gil(threads, [&] { queries.queries->count_hits(rays, out); });
+    uint32_t* out = reinterpret_cast<uint32_t*>(counts.mutable_data());
+    without_gil(threads, [&] {
+        in_ray_blocks(source, [&](size_t first, std::span<const Ray> rays) {
+            queries.queries->count_hits(rays, std::span<uint32_t>(out + first, rays.size()));
+        });
+    });
     return counts;
 }
 
@@ -154,9 +166,11 @@ struct ListedHit {
 
 py::dict list_intersections(const GeometryMap& map, const PyQueries& queries, const py::handle& rows, int threads) {
     map.check_size(queries.queries->triangle_count(), "the ray queries");
-    const std::vector<Ray> rays = rays_from_rows(queries.scene.frame, rows, 0.0, double(kInfinity), threads);
+    const RaySource source = rays_from_rows(queries.scene.frame, rows, 0.0, double(kInfinity));
+    std::vector<Ray> rays;
     ChunkedHits<ListedHit> lists;
     without_gil(threads, [&] {
+        rays = make_rays(source);
         lists = collect_chunked_hits<ListedHit>(*queries.queries, rays, kNoHitLimit, [](const QueryHit& hit) {
             return ListedHit{hit.primitive, float(hit.t), float(hit.u), float(hit.v)};
         });

@@ -160,54 +160,53 @@ size_t ray_count(const RealRows& origins, const RealRows& directions) {
                 std::to_string(directions.rows()) + " (one of them may be a single row, shared by every ray)");
 }
 
-namespace {
+RaySource::RaySource(const Frame& frame, RealRows origins, RealRows directions, PerRay tmin, PerRay tmax)
+    : frame_(frame),
+      origins_(std::move(origins)),
+      directions_(std::move(directions)),
+      tmin_(std::move(tmin)),
+      tmax_(std::move(tmax)),
+      count_(ray_count(origins_, directions_)) {}
 
-// The ray at index i, or nullptr and the reason it cannot be traced.
-template <typename O, typename D>
-const char* ray_at(const Frame& frame, const O& o, const D& d, const PerRay& tmin, const PerRay& tmax, size_t i,
-                   Ray& ray) {
-    for (int axis = 0; axis < 3; ++axis) {
-        ray.org[axis] = frame.to_local(o(i, axis), axis);
-        ray.dir[axis] = float(d(i, axis));
-    }
-    ray.tmin = float(tmin[i]);
-    ray.tmax = float(tmax[i]);
+const char* RaySource::reason(const Ray& ray) {
     if (!(ray.tmin >= 0.0f) || !(ray.tmax >= ray.tmin)) return "need 0 <= tmin <= tmax";  // also refuses NaN
     return untraceable_ray_reason(ray);
 }
 
-}  // namespace
+void RaySource::fail(size_t i) const {
+    Ray ray;
+    visit([&](const auto& read) { read(i, ray); });
+    std::string text = "ray " + std::to_string(i) + ": " + (reason(ray) ? reason(ray) : "cannot be traced");
+    if (!(ray.tmin >= 0.0f) || !(ray.tmax >= ray.tmin))
+        text += ", not tmin = " + std::to_string(ray.tmin) + ", tmax = " + std::to_string(ray.tmax);
+    else
+        text += " (origins row " + std::to_string(origins_.single() ? 0 : i) + ", directions row " +
+                std::to_string(directions_.single() ? 0 : i) + ")";
+    throw Error(text);
+}
 
-std::vector<Ray> make_rays(const Frame& frame, const RealRows& origins, const RealRows& directions, const PerRay& tmin,
-                           const PerRay& tmax) {
-    const size_t n = ray_count(origins, directions);
+std::vector<Ray> make_rays(const RaySource& source) {
+    const size_t n = source.size();
     std::vector<Ray> rays(n);
-    origins.visit([&](const auto& o) {
-        directions.visit([&](const auto& d) {
-            const size_t bad = first_failing(
-                n, 4096, [&](size_t i) { return ray_at(frame, o, d, tmin, tmax, i, rays[i]) == nullptr; });
-            if (bad == n) return;
-            Ray& ray = rays[bad];
-            const char* reason = ray_at(frame, o, d, tmin, tmax, bad, ray);
-            std::string text = "ray " + std::to_string(bad) + ": " + reason;
-            if (!(ray.tmin >= 0.0f) || !(ray.tmax >= ray.tmin))
-                text += ", not tmin = " + std::to_string(ray.tmin) + ", tmax = " + std::to_string(ray.tmax);
-            else
-                text += " (origins row " + std::to_string(origins.single() ? 0 : bad) + ", directions row " +
-                        std::to_string(directions.single() ? 0 : bad) + ")";
-            throw Error(text);
-        });
-    });
+    const size_t bad = source.visit(
+        [&](const auto& read) { return first_failing(n, 4096, [&](size_t i) { return read(i, rays[i]); }); });
+    if (bad < n) source.fail(bad);
     return rays;
+}
+
+RaySource ray_source(const Frame& frame, const py::handle& origins, const py::handle& directions,
+                     const py::handle& tmin, const py::handle& tmax) {
+    RealRows o = RealRows::from(origins, "origins", true), d = RealRows::from(directions, "directions", true);
+    const size_t n = ray_count(o, d);
+    PerRay low = PerRay::from(tmin, n, "tmin"), high = PerRay::from(tmax, n, "tmax");
+    return RaySource(frame, std::move(o), std::move(d), std::move(low), std::move(high));
 }
 
 std::vector<Ray> rays_from_arguments(const Frame& frame, const py::handle& origins, const py::handle& directions,
                                      const py::handle& tmin, const py::handle& tmax, int threads) {
-    const RealRows o = RealRows::from(origins, "origins", true), d = RealRows::from(directions, "directions", true);
-    const size_t n = ray_count(o, d);
-    const PerRay low = PerRay::from(tmin, n, "tmin"), high = PerRay::from(tmax, n, "tmax");
+    const RaySource source = ray_source(frame, origins, directions, tmin, tmax);
     std::vector<Ray> rays;
-    without_gil(threads, [&] { rays = make_rays(frame, o, d, low, high); });
+    without_gil(threads, [&] { rays = make_rays(source); });
     return rays;
 }
 

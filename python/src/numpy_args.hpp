@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -151,11 +152,80 @@ size_t read_finite_points(const RealRows& rows, std::span<Point> out, Put&& put)
 // row broadcast to the other's k. Throws Error naming both otherwise.
 size_t ray_count(const RealRows& origins, const RealRows& directions);
 
-// Rays in the scene's local frame from caller-frame origins and directions and per-ray [tmin, tmax];
-// each ray checked as ray files are (untraceable_ray_reason), the first bad one named (the lowest
-// index, whatever the thread count). Call without the GIL, inside the arena that should do the work.
-std::vector<Ray> make_rays(const Frame& frame, const RealRows& origins, const RealRows& directions, const PerRay& tmin,
-                           const PerRay& tmax);
+// Rays read in place: caller-frame origins and directions and per-ray [tmin, tmax], each ray taken
+// into the scene's local frame and checked as ray files are (untraceable_ray_reason) when read.
+class RaySource {
+public:
+    RaySource(const Frame& frame, RealRows origins, RealRows directions, PerRay tmin, PerRay tmax);
+    size_t size() const { return count_; }
+    // Calls f(read) with read(i, ray) writing ray i and returning whether it can be traced.
+    template <typename F>
+    decltype(auto) visit(F&& f) const {
+        return origins_.visit([&](const auto& o) {
+            return directions_.visit([&](const auto& d) {
+                return f([&](size_t i, Ray& ray) {
+                    for (int axis = 0; axis < 3; ++axis) {
+                        ray.org[axis] = frame_.to_local(o(i, axis), axis);
+                        ray.dir[axis] = float(d(i, axis));
+                    }
+                    ray.tmin = float(tmin_[i]);
+                    ray.tmax = float(tmax_[i]);
+                    return reason(ray) == nullptr;
+                });
+            });
+        });
+    }
+    // Throws Error naming ray i and why it cannot be traced.
+    [[noreturn]] void fail(size_t i) const;
+
+private:
+    static const char* reason(const Ray& ray);  // nullptr: traceable
+    Frame frame_;
+    RealRows origins_, directions_;
+    PerRay tmin_, tmax_;
+    size_t count_ = 0;
+};
+
+// Rays in the scene's local frame (RaySource), the first bad one named (the lowest index, whatever
+// the thread count). Call without the GIL, inside the arena that should do the work.
+std::vector<Ray> make_rays(const RaySource& source);
+
+// Rays per block of in_ray_blocks: a block's rays (8 KiB) and answers stay in the first-level cache.
+constexpr size_t kRayBlock = 256;
+
+// Runs trace(first, rays) over the source's rays in blocks of kRayBlock across the calling arena (call
+// without the GIL), each block's rays read into a buffer on the stack, so that no array of every ray
+// (or of every answer before its conversion) is made: trace writes block's answers straight into
+// the output arrays at first + i. A block with a ray that cannot be traced is not traced; afterwards
+// the lowest such ray is named (RaySource::fail), whatever the thread count.
+template <typename Trace>
+void in_ray_blocks(const RaySource& source, Trace&& trace) {
+    const size_t n = source.size();
+    const size_t blocks = (n + kRayBlock - 1) / kRayBlock;
+    const size_t bad = source.visit([&](const auto& read) {
+        std::atomic<size_t> first_bad{n};
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, blocks, 4), [&](const tbb::blocked_range<size_t>& range) {
+            std::array<Ray, kRayBlock> rays;
+            for (size_t b = range.begin(); b < range.end(); ++b) {
+                const size_t first = b * kRayBlock, count = std::min(kRayBlock, n - first);
+                size_t i = 0;
+                while (i < count && read(first + i, rays[i])) ++i;
+                if (i < count) {
+                    size_t seen = first_bad.load();
+                    while (first + i < seen && !first_bad.compare_exchange_weak(seen, first + i)) {}
+                    continue;
+                }
+                trace(first, std::span<const Ray>(rays.data(), count));
+            }
+        });
+        return first_bad.load();
+    });
+    if (bad < n) source.fail(bad);
+}
+
+// Parses the Python arguments (with the GIL) into a RaySource.
+RaySource ray_source(const Frame& frame, const py::handle& origins, const py::handle& directions,
+                     const py::handle& tmin, const py::handle& tmax);
 
 // Parses the Python arguments (with the GIL) and makes the rays in the arena of `threads` threads
 // without it.

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <optional>
 
@@ -11,31 +12,67 @@
 
 namespace spacebvh::python {
 
-py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int threads) {
-    const py::ssize_t n = py::ssize_t(hits.size());
-    py::array t = new_real_array(frame.float64, {n});
-    py::array_t<float> u(n), v(n);
-    py::array_t<int64_t> primitive(n);
-    void* t_out = t.mutable_data();
-    float* u_out = u.mutable_data();
-    float* v_out = v.mutable_data();
-    int64_t* primitive_out = primitive.mutable_data();
+namespace {
+
+// The arrays closest hits are returned in: t in the frame's dtype (inf on a miss), primitive int64 (-1
+// on a miss), u, v float32; put(i, hit) writes row i (without the GIL: the arrays are made first).
+struct HitArrays {
+    py::array t;
+    py::array_t<float> u, v;
+    py::array_t<int64_t> primitive;
+    bool float64;
+    void* t_out;
+    float *u_out, *v_out;
+    int64_t* primitive_out;
+
+    HitArrays(const Frame& frame, size_t count)
+        : t(new_real_array(frame.float64, {py::ssize_t(count)})),
+          u(py::ssize_t(count)),
+          v(py::ssize_t(count)),
+          primitive(py::ssize_t(count)),
+          float64(frame.float64),
+          t_out(t.mutable_data()),
+          u_out(u.mutable_data()),
+          v_out(v.mutable_data()),
+          primitive_out(primitive.mutable_data()) {}
+
     // t needs no change of frame: the frame moves origins, not directions.
+    void put(size_t i, const Hit& hit) const {
+        if (float64)
+            static_cast<double*>(t_out)[i] = hit.t;
+        else
+            static_cast<float*>(t_out)[i] = hit.t;
+        primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
+        u_out[i] = hit.u;
+        v_out[i] = hit.v;
+    }
+
+    py::tuple as_tuple() const { return py::make_tuple(t, primitive, u, v); }
+};
+
+}  // namespace
+
+py::tuple hits_as_arrays(const Frame& frame, const std::vector<Hit>& hits, int threads) {
+    const HitArrays arrays(frame, hits.size());
     without_gil(threads, [&] {
         in_blocks(hits.size(), 1 << 13, [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) {
-                const Hit& hit = hits[i];
-                if (frame.float64)
-                    static_cast<double*>(t_out)[i] = hit.t;
-                else
-                    static_cast<float*>(t_out)[i] = hit.t;
-                primitive_out[i] = hit.is_hit() ? int64_t(hit.primitive) : -1;
-                u_out[i] = hit.u;
-                v_out[i] = hit.v;
-            }
+            for (size_t i = begin; i < end; ++i) arrays.put(i, hits[i]);
         });
     });
-    return py::make_tuple(t, primitive, u, v);
+    return arrays.as_tuple();
+}
+
+py::array_t<bool> occluded_in_blocks(const Tracer& tracer, const RaySource& source, int threads) {
+    py::array_t<bool> answers(py::ssize_t(source.size()));
+    bool* out = answers.mutable_data();
+    without_gil(threads, [&] {
+        in_ray_blocks(source, [&](size_t first, std::span<const Ray> rays) {
+            std::array<uint8_t, kRayBlock> occluded;
+            tracer.occluded(rays, std::span<uint8_t>(occluded.data(), rays.size()));
+            for (size_t k = 0; k < rays.size(); ++k) out[first + k] = occluded[k] != 0;
+        });
+    });
+    return answers;
 }
 
 py::array_t<bool> answers_as_array(const std::vector<uint8_t>& answers, int threads) {
@@ -56,10 +93,17 @@ int threads_for(const PyTracer& self, std::optional<int> threads) { return threa
 py::tuple closest_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
                        const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
-    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
-    std::vector<Hit> hits(rays.size());
-    without_gil(threads, [&] { self.tracer->intersect(std::span<const Ray>(rays), std::span<Hit>(hits)); });
-    return hits_as_arrays(self.scene.frame, hits, threads);
+    const RaySource source = ray_source(self.scene.frame, origins, directions, tmin, tmax);
+    const HitArrays arrays(self.scene.frame, source.size());
+    // Block by block (in_ray_blocks): each block's hits go straight into the arrays.
+    without_gil(threads, [&] {
+        in_ray_blocks(source, [&](size_t first, std::span<const Ray> rays) {
+            std::array<Hit, kRayBlock> hits;
+            self.tracer->intersect(rays, std::span<Hit>(hits.data(), rays.size()));
+            for (size_t k = 0; k < rays.size(); ++k) arrays.put(first + k, hits[k]);
+        });
+    });
+    return arrays.as_tuple();
 }
 
 // The rays that hit, in ray order: (index_ray, primitive, points or None). Filtering the misses and
@@ -125,10 +169,8 @@ py::tuple compact_hits(const PyTracer& self, const py::handle& origins, const py
 py::array_t<bool> any_hits(const PyTracer& self, const py::handle& origins, const py::handle& directions,
                            const py::handle& tmin, const py::handle& tmax, std::optional<int> threads_arg) {
     const int threads = threads_for(self, threads_arg);
-    const std::vector<Ray> rays = rays_from_arguments(self.scene.frame, origins, directions, tmin, tmax, threads);
-    std::vector<uint8_t> answers(rays.size());
-    without_gil(threads, [&] { self.tracer->occluded(std::span<const Ray>(rays), std::span<uint8_t>(answers)); });
-    return answers_as_array(answers, threads);
+    const RaySource source = ray_source(self.scene.frame, origins, directions, tmin, tmax);
+    return occluded_in_blocks(*self.tracer, source, threads);
 }
 
 }  // namespace

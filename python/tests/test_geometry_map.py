@@ -166,3 +166,34 @@ def test_bad_input_is_named():
         smaller.list_intersections(queries, rays)
     with pytest.raises(spacebvh.Error, match="threads must be >= 0"):
         geometry_map.cast_rays(tracer, rays, threads=-1)
+
+
+def test_the_lowest_bad_ray_is_named_across_blocks():
+    """The ray queries read and trace the rows block by block: whichever blocks hold bad rays and however
+    many threads run, the lowest bad ray is named, and a batch of good rays of any length (not a multiple
+    of a block) answers as the general calls do."""
+    scene = spacebvh.load_scene("builtin:" + spacebvh.builtin_scenes()[0])
+    geometry_map, tracer, queries = setup(scene, [len(scene.triangles())])
+    rays = random_rays(scene, 5000, 12)
+    bad = rays.copy()
+    bad[[4321, 777, 3000], [3, 0, 5]] = [np.nan, np.inf, np.nan]
+    bad[1999, 3:] = 0.0  # a zero direction
+    for threads in (1, 2):
+        for call, over in (
+            (geometry_map.cast_rays, tracer),
+            (geometry_map.test_occlusions, tracer),
+            (geometry_map.count_intersections, queries),
+            (geometry_map.list_intersections, queries),
+        ):
+            with pytest.raises(spacebvh.Error, match=r"^ray 777: "):
+                call(over, bad, threads=threads)
+            with pytest.raises(spacebvh.Error, match=r"^ray 999: "):
+                call(over, bad[1000:], threads=threads)  # rows numbered from the slice's start
+        for count in (1, 255, 256, 257, 1025):
+            part = rays[:count]
+            t = tracer.intersect(part[:, :3], part[:, 3:])[0]
+            assert np.array_equal(geometry_map.cast_rays(tracer, part, threads=threads)["t_hit"], t)
+            occluded = tracer.occluded(part[:, :3], part[:, 3:])
+            assert np.array_equal(geometry_map.test_occlusions(tracer, part, threads=threads), occluded)
+            counts = queries.count(part[:, :3], part[:, 3:])
+            assert np.array_equal(geometry_map.count_intersections(queries, part, threads=threads), counts)
