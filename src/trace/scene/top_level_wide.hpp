@@ -65,15 +65,17 @@ using TopMask = int __attribute__((vector_size(4 * kTopLanes)));
 // grown origin each row is measured from, and the constants already broadcast across the lanes, so
 // a node costs two loads, a subtract, a multiply and a min or max per plane row, and no branch.
 //
-// A parallel axis (BoxRay::parallel) is tested with no branch either: its inverse becomes +inf with
-// the lower planes near. A lower plane beyond the grown origin gives +inf (near > far: culled), one
-// before or at it -inf or NaN (0 * inf), which leaves `near` as it is (near < NaN is false); upper
-// planes likewise with `far`. That is meets' test `lo <= lo_org && hi >= hi_org`, and the entry
-// distance is unchanged, as meets leaves it.
+// An axis the ray runs parallel to (BoxRay::parallel, rare: `parallel` says whether any) takes
+// meets' test `lo <= lo_org && hi >= hi_org` as a lane mask. Its inverse becomes +inf with the
+// lower planes near, so the shared arithmetic leaves `near` and `far` as meets does: a plane at or
+// on the inner side of the grown origin gives -inf or NaN (0 * inf) for near, +inf or NaN for far,
+// which change nothing (a compare with NaN is false); a plane on the outer side gives +inf or -inf,
+// which only ever culls a lane the mask culls too.
 struct WideRay {
     TopLanes near_org[3], far_org[3], inv[3];
     TopLanes tmin;
     uint32_t near_row[3], far_row[3];  // byte offsets of the rows in a TopNode (lo[i] or hi[i])
+    bool parallel = false;             // some axis is parallel (BoxRay::parallel)
 
     explicit WideRay(const BoxRay& ray) {
         for (int i = 0; i < 3; ++i) {
@@ -84,6 +86,7 @@ struct WideRay {
             far_org[i] = (negative ? ray.lo_org[i] : ray.hi_org[i]) - TopLanes{};
             near_row[i] = uint32_t(negative ? offsetof(TopNode, hi) : offsetof(TopNode, lo)) + 4 * kTopWidth * i;
             far_row[i] = uint32_t(negative ? offsetof(TopNode, lo) : offsetof(TopNode, hi)) + 4 * kTopWidth * i;
+            parallel = parallel || ray.parallel[i];
         }
         tmin = ray.tmin - TopLanes{};
     }
@@ -106,6 +109,17 @@ struct WideTopQuery {
 
     Entry root() const { return {0, ray.tmin}; }
     bool is_leaf(const Entry& e) const { return (e.ref & kItemBit) != 0; }
+    // A bit per child whose box holds the grown origin on every parallel axis (WideRay).
+    [[gnu::noinline]] unsigned inside_parallel_slabs(const TopNode& n) const {
+        unsigned inside = 0;
+        for (int slot = 0; slot < kTopWidth; ++slot) {
+            bool in = true;
+            for (int i = 0; i < 3; ++i)
+                in = in && (!ray.parallel[i] || (n.lo[i][slot] <= ray.lo_org[i] && n.hi[i][slot] >= ray.hi_org[i]));
+            inside |= unsigned(in) << slot;
+        }
+        return inside;
+    }
     bool beyond(const Entry& e, Bound bound) const { return e.key > bound; }
     // All children's boxes at once, with the float operations of scene::meets lane by lane (GCC
     // vector extensions: AVX where the build has it, SSE halves otherwise; no FMA contraction): per
@@ -134,6 +148,8 @@ struct WideTopQuery {
             __builtin_memcpy(key + first, &near, sizeof near);
         }
         entered &= n.valid;
+        if (wide.parallel) [[unlikely]]
+            entered &= inside_parallel_slabs(n);
         if (!entered) return 0;
         // One child, the usual case below the root: no sort.
         if ((entered & (entered - 1)) == 0) {
