@@ -72,10 +72,14 @@ unsigned expect_same_as_meets(const std::vector<TopNode>& nodes, const BoxRay& r
 float pick_direction(std::mt19937& rng) {
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     switch (rng() % 8) {
-        case 0: return 0.0f;
-        case 1: return -0.0f;
-        case 2: return (rng() % 2 ? 1.0f : -1.0f) * 1e-39f;  // subnormal: its inverse overflows
-        default: return u(rng);
+        case 0:
+            return 0.0f;
+        case 1:
+            return -0.0f;
+        case 2:
+            return (rng() % 2 ? 1.0f : -1.0f) * 1e-39f;  // subnormal: its inverse overflows
+        default:
+            return u(rng);
     }
 }
 
