@@ -135,11 +135,11 @@ struct WideTopQuery {
         for (int first = 0; first < kTopWidth; first += kTopLanes) {
             TopLanes near = wide.tmin, far = far_bound;
             for (int i = 0; i < 3; ++i) {
-                TopLanes lo, hi;
-                __builtin_memcpy(&lo, base + wide.near_row[i] + 4 * first, sizeof lo);
-                __builtin_memcpy(&hi, base + wide.far_row[i] + 4 * first, sizeof hi);
-                const TopLanes low = (lo - wide.near_org[i]) * wide.inv[i];
-                const TopLanes high = (hi - wide.far_org[i]) * wide.inv[i];
+                TopLanes entry_planes, exit_planes;
+                __builtin_memcpy(&entry_planes, base + wide.near_row[i] + 4 * first, sizeof entry_planes);
+                __builtin_memcpy(&exit_planes, base + wide.far_row[i] + 4 * first, sizeof exit_planes);
+                const TopLanes low = (entry_planes - wide.near_org[i]) * wide.inv[i];
+                const TopLanes high = (exit_planes - wide.far_org[i]) * wide.inv[i];
                 near = near < low ? low : near;
                 far = high < far ? high : far;
             }
