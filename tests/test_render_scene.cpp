@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "scene_test_support.hpp"
@@ -414,6 +415,43 @@ TEST(RenderScene, VectorisedRayTransformIsTheDocumentedOneBitForBit) {
     }
     EXPECT_EQ(compared, 10000u);
     EXPECT_GT(rounded_differently, 1000u);
+}
+
+}  // namespace
+
+namespace {
+
+// The walks' finiteness check of the transformed ray (RayTransform::apply_finite) against
+// is_finite_ray of the documented ray, on rays whose image overflows float on some coordinates
+// (origins up to FLT_MAX taken through scales that enlarge), the rest compared bit for bit.
+TEST(RenderScene, RayTransformSaysWhereTheRayOverflows) {
+    const AABB box{{-1, -1, -1}, {1, 1, 1}};
+    size_t finite = 0, overflowed = 0;
+    for (int k = 0; k < 40; ++k) {
+        const float shrink = 0.05f + 0.02f * float(k);  // the inverse scales rays by 1 / shrink
+        const Affine a = placed({1.0f, float(k), 2.0f}, float(9 * k), {shrink, 2.0f * shrink, shrink},
+                                {0.0f, 1e30f * float(k % 3), 0.0f}, k % 2 == 0);
+        const scene::InstanceTransform xf = scene::make_instance_transform(a, box, {}, "test");
+        const scene::RayTransform vectorised(xf);
+        for (int r = 0; r < 200; ++r) {
+            Ray ray;
+            const float big = std::ldexp(1.0f, 100 + r % 28) * (1.0f + float(r) / 256.0f);
+            ray.org =
+                Vec3(r % 2 ? big : -big, float(r) - 100.0f, r % 5 == 0 ? std::numeric_limits<float>::max() : 1.0f);
+            ray.dir = Vec3(1.0f, r % 3 == 0 ? big : 0.5f, -0.0f);
+            const Ray want = scene::to_instance(xf, ray);
+            Ray got;
+            const bool ok = vectorised.apply_finite(ray, got);
+            EXPECT_EQ(ok, scene::is_finite_ray(want)) << k << " " << r;
+            for (int i = 0; i < 3; ++i) {
+                EXPECT_EQ(std::bit_cast<uint32_t>(got.org[i]), std::bit_cast<uint32_t>(want.org[i])) << k << " " << r;
+                EXPECT_EQ(std::bit_cast<uint32_t>(got.dir[i]), std::bit_cast<uint32_t>(want.dir[i])) << k << " " << r;
+            }
+            (ok ? finite : overflowed) += 1;
+        }
+    }
+    EXPECT_GT(finite, 1000u);
+    EXPECT_GT(overflowed, 1000u);
 }
 
 }  // namespace

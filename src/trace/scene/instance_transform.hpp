@@ -73,15 +73,27 @@ struct RayTransform {
     explicit RayTransform(const InstanceTransform& xf) : RayTransform(xf.inverse.data(), xf.inverse_shift.data()) {}
 
     Ray apply(const Ray& ray) const {
+        Ray out;
+        apply_finite(ray, out);
+        return out;
+    }
+
+    // apply, and whether the ray in the instance's space is finite (is_finite_ray): rounded to
+    // float four lanes at once, a coordinate that overflowed is +-inf there, and x - x is 0 for
+    // every finite x and NaN for an infinite one, so one compare of the sum checks all six.
+    bool apply_finite(const Ray& ray, Ray& out) const {
+        using F4 = float __attribute__((vector_size(16)));
         const D4 org =
             (column[0] * double(ray.org.x) + column[1] * double(ray.org.y)) + column[2] * double(ray.org.z) + shift;
         const D4 dir = (column[0] * double(ray.dir.x) + column[1] * double(ray.dir.y)) + column[2] * double(ray.dir.z);
-        Ray out = ray;
+        const F4 o = __builtin_convertvector(org, F4), d = __builtin_convertvector(dir, F4);
+        out = ray;
         for (int i = 0; i < 3; ++i) {
-            out.org[i] = float(org[i]);
-            out.dir[i] = float(dir[i]);
+            out.org[i] = o[i];
+            out.dir[i] = d[i];
         }
-        return out;
+        const F4 zero = (o - o) + (d - d);
+        return zero[0] == 0.0f && zero[1] == 0.0f && zero[2] == 0.0f;
     }
 };
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -60,21 +61,26 @@ struct Geometry {
 // leaves (a wide node's leaf child is kItemBit | its leaf's first record): the geometry's id and
 // mask, and for a mesh or an instance of a one-mesh scene the mesh's kernel entry, so entering an
 // instance reads this record and the mesh's layout, nothing between (docs/scenes.md, "Speed").
-struct TopRecord {
+// 192 bytes on 64-byte boundaries: what every visit reads (mask, flags, kernel entry, mesh) in the
+// first cache line, the ray transform an instance's entry reads in the next two.
+struct alignas(64) TopRecord {
     enum Kind : uint8_t { kMesh, kInstanceOfMesh, kInstanceOfScene };
-    RayTransform to_instance;  // an instance's (InstanceTransform::inverse, inverse_shift)
-    uint32_t mask = 0;         // the geometry's (RenderScene::set_mask keeps it current)
-    uint32_t id = 0;           // the geometry's id
-    uint32_t item = 0;         // the top-level item (its box, tested when its leaf holds several)
-    uint32_t mesh_id = 0;      // kInstanceOfMesh: the mesh's id in the instanced scene
+    uint32_t mask = 0;     // the geometry's (RenderScene::set_mask keeps it current)
+    uint32_t id = 0;       // the geometry's id
+    uint32_t item = 0;     // the top-level item (its box, tested when its leaf holds several)
+    uint32_t mesh_id = 0;  // kInstanceOfMesh: the mesh's id in the instanced scene
     Kind kind = kMesh;
-    bool last = false;                         // the last record of its leaf
-    bool test_box = false;                     // its leaf holds several items: its box was not tested on the way down
-    const MeshRecord* mesh = nullptr;          // kMesh, kInstanceOfMesh
-    const uint32_t* mesh_mask = nullptr;       // kInstanceOfMesh: that mesh's mask in the instanced scene
-    const RenderScene::Impl* child = nullptr;  // kInstanceOfScene
-    trace::KernelEntry kernel;                 // of `mesh`
+    bool last = false;                 // the last record of its leaf
+    bool test_box = false;             // its leaf holds several items: its box was not tested on the way down
+    trace::KernelEntry kernel;         // of `mesh`
+    const MeshRecord* mesh = nullptr;  // kMesh, kInstanceOfMesh
+    union {
+        const uint32_t* mesh_mask = nullptr;  // kInstanceOfMesh: that mesh's mask in the instanced scene
+        const RenderScene::Impl* child;       // kInstanceOfScene
+    };
+    RayTransform to_instance;  // an instance's (InstanceTransform::inverse, inverse_shift)
 };
+static_assert(sizeof(TopRecord) == 192 && offsetof(TopRecord, to_instance) == 64);
 
 // The instance ids from the traced scene down to the scene being walked.
 using InstancePath = std::array<uint32_t, kMaxInstanceLevels>;

@@ -131,8 +131,8 @@ void RenderScene::Impl::closest(const Ray& ray, QueryState& state, uint32_t leve
                 mesh_closest(*r.mesh, r.kernel, r.id, bounded(), state, best);
             } else {
                 state.path[level] = r.id;
-                const Ray local = r.to_instance.apply(bounded());
-                if (!scene::is_finite_ray(local)) {
+                Ray local;
+                if (!r.to_instance.apply_finite(bounded(), local)) {
                     // no hit in this instance (docs/scenes.md)
                 } else if (r.kind == TopRecord::kInstanceOfMesh) {
                     if (*r.mesh_mask & state.mask) mesh_closest(*r.mesh, r.kernel, r.mesh_id, local, state, best);
@@ -155,9 +155,9 @@ bool RenderScene::Impl::occluded(const Ray& ray, QueryState& state, uint32_t lev
         return blocked = visit_records(*this, entry.ref, query.ray, bound, state.mask, [&](const TopRecord& r) {
                    if (r.kind == TopRecord::kMesh) return mesh_occluded(*r.mesh, r.kernel, r.id, ray, state);
                    state.path[level] = r.id;
-                   const Ray local = r.to_instance.apply(ray);
+                   Ray local;
                    bool hit;
-                   if (!scene::is_finite_ray(local))
+                   if (!r.to_instance.apply_finite(ray, local))
                        hit = false;  // no hit in this instance (docs/scenes.md)
                    else if (r.kind == TopRecord::kInstanceOfMesh)
                        hit = (*r.mesh_mask & state.mask) && mesh_occluded(*r.mesh, r.kernel, r.mesh_id, local, state);
