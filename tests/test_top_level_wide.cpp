@@ -62,9 +62,10 @@ unsigned expect_same_as_meets(const std::vector<TopNode>& nodes, const BoxRay& r
         float entry = 0.0f;
         const bool met = meets(ray, box_of(nodes[0], slot), bound, entry);
         EXPECT_EQ(met, (wide.slots >> slot) & 1u) << what << ": slot " << slot;
-        if (met && ((wide.slots >> slot) & 1u))
+        if (met && ((wide.slots >> slot) & 1u)) {
             EXPECT_EQ(std::signbit(entry), std::signbit(wide.key[slot])) << what << ": slot " << slot;
-        if (met && ((wide.slots >> slot) & 1u)) EXPECT_EQ(entry, wide.key[slot]) << what << ": slot " << slot;
+            EXPECT_EQ(entry, wide.key[slot]) << what << ": slot " << slot;
+        }
     }
     return wide.slots;
 }
