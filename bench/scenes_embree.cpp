@@ -137,7 +137,8 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
         "| flattened/two-level | Embree flattened ms | Embree flattened/ours flattened |\n",
         triangles, build_ms);
     size_t k = 0;
-    for (const auto& [kind, rays] : kinds)
+    for (const auto& [kind, kind_rays] : kinds) {
+        const auto* const rays = kind_rays;  // a variable: clang before 16 captures no structured binding
         for (bool occlusion : {false, true}) {
             std::vector<Hit> hits(rays->size());
             std::vector<uint8_t> blocked(rays->size());
@@ -157,6 +158,7 @@ void flattened(const tools::Scene& mesh, const std::vector<Affine>& placed, cons
                         ms, two_level_ms[k], ms / two_level_ms[k], embree_ms, embree_ms / ms);
             ++k;
         }
+    }
 }
 
 // The two-level scene: `leaf` placed by each transform (instance id k is placed[k]).
@@ -320,11 +322,13 @@ int main(int argc, char** argv) try {
     }
     std::printf("| rays | query | kernel | ours ms | Embree ms | Embree/ours | disagreements |\n");
     std::vector<double> bvh8_ms;  // per ray kind and query, in the loop's order
-    for (const auto& [kind, rays] : kinds)
+    for (const auto& [kind, kind_rays] : kinds) {
+        const auto* const rays = kind_rays;  // a variable: clang before 16 captures no structured binding
         for (bool occlusion : {false, true}) {
             std::vector<float> theirs(rays->size()), mine(rays->size());
             const double embree_ms = median_ms(runs, [&] { trace_t(*embree, *rays, theirs, occlusion); });
-            for (const auto& [kernel, top] : traced) {
+            for (const auto& [kernel, kernel_scene] : traced) {
+                const auto& top = kernel_scene;
                 const double ours_ms = median_ms(runs, [&] { trace_t(*top, *rays, mine, occlusion); });
                 if (kernel == Kernel::bvh8) bvh8_ms.push_back(ours_ms);
                 std::printf("| %s | %s | %s | %.1f | %.1f | %.2f | %zu |\n", kind, occlusion ? "occluded" : "closest",
@@ -332,6 +336,7 @@ int main(int argc, char** argv) try {
                             disagreements(*rays, mine, theirs, diagonal));
             }
         }
+    }
 
     single_mesh(mesh, *embree_mesh, ray_count, runs);
     flattened(mesh, placed, kinds, bvh8_ms, runs);

@@ -159,11 +159,11 @@ TEST(TopLevelWide, CullsBoxesOffTheRay) {
     ray.dir = Vec3(1.0f, 0.0f, -0.0f);
     const BoxRay box_ray(ray, Padding{}, 10.0);
     std::vector<TopNode> nodes(1);
-    set_box(nodes[0], 0, AABB(Vec3(2.0f, -1.0f, -1.0f), Vec3(3.0f, 1.0f, 1.0f)));    // ahead: entered at 2
-    set_box(nodes[0], 1, AABB(Vec3(2.0f, 0.5f, -1.0f), Vec3(3.0f, 1.0f, 1.0f)));     // beside (y): culled
-    set_box(nodes[0], 2, AABB(Vec3(2.0f, -1.0f, -3.0f), Vec3(3.0f, 1.0f, -0.5f)));   // beside (z, -0): culled
-    set_box(nodes[0], 3, AABB(Vec3(-3.0f, -1.0f, -1.0f), Vec3(-2.0f, 1.0f, 1.0f)));  // behind: culled
-    set_box(nodes[0], 4, AABB(Vec3(20.0f, -1.0f, -1.0f), Vec3(30.0f, 1.0f, 1.0f)));  // past the bound: culled
+    set_box(nodes[0], 0, AABB{Vec3(2.0f, -1.0f, -1.0f), Vec3(3.0f, 1.0f, 1.0f)});    // ahead: entered at 2
+    set_box(nodes[0], 1, AABB{Vec3(2.0f, 0.5f, -1.0f), Vec3(3.0f, 1.0f, 1.0f)});     // beside (y): culled
+    set_box(nodes[0], 2, AABB{Vec3(2.0f, -1.0f, -3.0f), Vec3(3.0f, 1.0f, -0.5f)});   // beside (z, -0): culled
+    set_box(nodes[0], 3, AABB{Vec3(-3.0f, -1.0f, -1.0f), Vec3(-2.0f, 1.0f, 1.0f)});  // behind: culled
+    set_box(nodes[0], 4, AABB{Vec3(20.0f, -1.0f, -1.0f), Vec3(30.0f, 1.0f, 1.0f)});  // past the bound: culled
     const unsigned slots = expect_same_as_meets(nodes, box_ray, 10.0f, "off the ray");
     EXPECT_EQ(slots, 1u);
     const float key = wide_enter(nodes, box_ray, 10.0f).key[0];
