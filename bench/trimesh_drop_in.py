@@ -69,7 +69,7 @@ def overhead_on(name, vertices, faces, args):
         (
             "intersects_location (single)",
             lambda: ray.intersects_location(o, d, multiple_hits=False),
-            lambda: tracer.intersect(o, d),
+            lambda: tracer.hits(o, d, points=True),
         ),
         (
             "intersects_location (multiple)",
