@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "trace/kernels/kernels.hpp"
+#include "trace/target_region.hpp"
 #include "trace/leaf_tests/moller_filter.hpp"
 #include "trace/layout/quantized_layout.hpp"
 #include "trace/traversal/traversal_common.hpp"
@@ -153,12 +154,7 @@ struct Policy : SseOperations {};
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace sse_kernels
 
-#if defined(__clang__)  // clang ignores GCC's target pragma; its own attribute pragma does the same
-#pragma clang attribute push(__attribute__((target("avx2,fma"))), apply_to = function)
-#else
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
-#endif
+SPACEBVH_TARGET_BEGIN("avx2,fma")
 struct Avx2Operations {
     static constexpr int kLanes = 8;
     static constexpr bool kScalarTriangles = false;
@@ -198,18 +194,9 @@ struct Policy : Avx2Operations {};
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace avx2_kernels
-#if defined(__clang__)
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#endif
+SPACEBVH_TARGET_END()
 
-#if defined(__clang__)  // clang ignores GCC's target pragma; its own attribute pragma does the same
-#pragma clang attribute push(__attribute__((target("avx2,fma,avx512f,avx512vl"))), apply_to = function)
-#else
-#pragma GCC push_options
-#pragma GCC target("avx2,fma,avx512f,avx512vl")
-#endif
+SPACEBVH_TARGET_BEGIN("avx2,fma,avx512f,avx512vl")
 // AVX-512VL: compares straight into mask registers, and the hit children compressed into slot order
 // in registers (a compress to memory is microcoded and slow on some CPUs).
 namespace avx512_kernels {
@@ -245,11 +232,7 @@ struct Policy<8> : Avx2Operations {
 #include "trace/kernels/packet_kernel.inl"
 #include "trace/kernels/kernel_entry_points.inl"
 }  // namespace avx512_kernels
-#if defined(__clang__)
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#endif
+SPACEBVH_TARGET_END()
 
 bool cpu_has(NodeTest test) {
     switch (test) {

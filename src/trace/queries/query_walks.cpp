@@ -25,6 +25,7 @@
 #include "trace/leaf_tests/triangle_pack.hpp"
 #include "trace/leaf_tests/watertight_triangle.hpp"
 #include "trace/queries/query_node_tests.hpp"
+#include "trace/target_region.hpp"
 #include "trace/traversal/walk.hpp"
 
 namespace spacebvh::trace::queries {
@@ -55,12 +56,7 @@ namespace baseline_walks {
 constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, collect_hits, count_crossings};
 }  // namespace baseline_walks
 
-#if defined(__clang__)  // clang ignores GCC's target pragma; its own attribute pragma does the same
-#pragma clang attribute push(__attribute__((target("avx2,fma"))), apply_to = function)
-#else
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
-#endif
+SPACEBVH_TARGET_BEGIN("avx2,fma")
 #endif
 // The walk skeleton again, under this target: the baseline's walk() may not inline a node test
 // compiled for AVX2.
@@ -73,11 +69,7 @@ namespace avx2_walks {
 constexpr Walks kWalks{nearest_crossing, nearest_crossing_id, any_crossing, collect_hits, count_crossings};
 }  // namespace avx2_walks
 #if SPACEBVH_QUERY_WALKS_BASELINE
-#if defined(__clang__)
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#endif
+SPACEBVH_TARGET_END()
 
 const Walks& walks_of(const Layout& layout) { return layout.has_wide ? avx2_walks::kWalks : baseline_walks::kWalks; }
 #else
